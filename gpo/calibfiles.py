@@ -1,0 +1,154 @@
+"""Read and write camera calibrations in the formats of Kalibr and Basalt.
+
+Kalibr camchain YAML (one block per camera, ``cam0``, ``cam1``, ...)::
+
+    cam0:
+      camera_model: eucm            # or pinhole
+      intrinsics: [alpha, beta, fu, fv, pu, pv]   # pinhole: [fu, fv, pu, pv]
+      distortion_model: none        # pinhole: radtan (or none)
+      distortion_coeffs: []         # radtan: [k1, k2, r1, r2]
+      resolution: [width, height]
+      rostopic: /cam0/image_raw
+
+Basalt calibration JSON (cereal)::
+
+    {"value0": {"intrinsics": [{"camera_type": "eucm",
+                                "intrinsics": {"fx": ..., "fy": ..., "cx": ..., "cy": ...,
+                                               "alpha": ..., "beta": ...}}, ...],
+                "resolution": [[width, height], ...], ...}}
+
+Only the models of ``gpo.camera`` are read; any other model is refused with an error that names
+it and the file.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import yaml
+
+from gpo.camera import EUCM, EUCM_PARAMETER_NAMES, Pinhole
+
+Camera = EUCM | Pinhole
+
+
+def _field(entry: Mapping, key: str, where: str):
+    if key not in entry:
+        raise ValueError(f"{where}: missing the field '{key}'")
+    return entry[key]
+
+
+def load_kalibr(path) -> dict[str, Camera]:
+    """Cameras of a Kalibr camchain YAML, by name (``cam0``, ...), in the file's order."""
+    path = Path(path)
+    document = yaml.safe_load(path.read_text())
+    if not isinstance(document, Mapping) or not document:
+        raise ValueError(f"{path}: not a Kalibr camchain (expected a mapping of cam0, cam1, ...)")
+    return {name: _camera_from_kalibr(entry, f"{path}, {name}") for name, entry in document.items()}
+
+
+def _camera_from_kalibr(entry: Mapping, where: str) -> Camera:
+    model = _field(entry, "camera_model", where)
+    intrinsics = [float(v) for v in _field(entry, "intrinsics", where)]
+    width, height = _field(entry, "resolution", where)
+    distortion = entry.get("distortion_model", "none")
+    coeffs = [float(v) for v in entry.get("distortion_coeffs", []) or []]
+    if model == "eucm" and distortion == "none" and len(intrinsics) == 6:
+        alpha, beta, fx, fy, cx, cy = intrinsics
+        return EUCM(fx, fy, cx, cy, alpha, beta, width, height)
+    if model == "pinhole" and distortion in ("radtan", "none") and len(intrinsics) == 4:
+        if distortion == "none":
+            coeffs = [0.0, 0.0, 0.0, 0.0]
+        if len(coeffs) != 4:
+            raise ValueError(f"{where}: radtan needs 4 distortion_coeffs [k1, k2, r1, r2], got {len(coeffs)}")
+        return Pinhole(*intrinsics, tuple(coeffs), width, height)
+    raise ValueError(
+        f"{where}: unsupported camera model '{model}' with distortion '{distortion}' and "
+        f"{len(intrinsics)} intrinsics; supported are 'eucm' (6 intrinsics, distortion 'none') "
+        "and 'pinhole' (4 intrinsics, distortion 'radtan' or 'none')"
+    )
+
+
+def _camera_to_kalibr(camera: Camera, name: str) -> dict:
+    if isinstance(camera, EUCM):
+        return {
+            "camera_model": "eucm",
+            "intrinsics": [camera.alpha, camera.beta, camera.fx, camera.fy, camera.cx, camera.cy],
+            "distortion_model": "none",
+            "distortion_coeffs": [],
+            "resolution": [camera.width, camera.height],
+        }
+    if isinstance(camera, Pinhole):
+        k1, k2, p1, p2, *rest = camera.dist
+        if rest and rest[0] != 0.0:
+            raise ValueError(f"{name}: Kalibr's radtan has no k3, but this camera has k3 = {rest[0]}")
+        return {
+            "camera_model": "pinhole",
+            "intrinsics": [camera.fx, camera.fy, camera.cx, camera.cy],
+            "distortion_model": "radtan",
+            "distortion_coeffs": [k1, k2, p1, p2],
+            "resolution": [camera.width, camera.height],
+        }
+    raise TypeError(f"{name}: cannot write a {type(camera).__name__} as a Kalibr camera")
+
+
+def save_kalibr(path, cameras: Mapping[str, Camera], rostopics: Mapping[str, str] | None = None) -> Path:
+    """Write ``cameras`` (name -> camera) as a Kalibr camchain YAML; ``rostopics`` maps name -> topic."""
+    document = {}
+    for name, camera in cameras.items():
+        document[name] = _camera_to_kalibr(camera, name)
+        if rostopics and name in rostopics:
+            document[name]["rostopic"] = rostopics[name]
+    path = Path(path)
+    path.write_text(yaml.safe_dump(document, sort_keys=False, default_flow_style=None))
+    return path
+
+
+def load_basalt(path) -> list[EUCM]:
+    """Cameras of a Basalt calibration JSON, in the file's order."""
+    path = Path(path)
+    try:
+        document = json.loads(path.read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path}: not valid JSON ({error})") from None
+    calibration = _field(document, "value0", str(path))
+    entries = _field(calibration, "intrinsics", f"{path}, value0")
+    sizes = _field(calibration, "resolution", f"{path}, value0")
+    if len(entries) != len(sizes):
+        raise ValueError(f"{path}: {len(entries)} cameras in 'intrinsics' but {len(sizes)} in 'resolution'")
+    cameras = []
+    for index, (entry, (width, height)) in enumerate(zip(entries, sizes, strict=True)):
+        where = f"{path}, camera {index}"
+        model = _field(entry, "camera_type", where)
+        if model != "eucm":
+            raise ValueError(f"{where}: unsupported camera model '{model}'; supported is 'eucm'")
+        values = _field(entry, "intrinsics", where)
+        params = [float(_field(values, name, where)) for name in EUCM_PARAMETER_NAMES]
+        cameras.append(EUCM(*params, width, height))
+    return cameras
+
+
+def save_basalt(path, cameras: Sequence[EUCM], template: Mapping | None = None) -> Path:
+    """Write ``cameras`` as a Basalt calibration JSON.
+
+    Only the cameras' intrinsics and resolutions are written. Pass a loaded Basalt document as
+    ``template`` to keep everything else it holds (camera-IMU extrinsics, IMU noise, ...): its
+    intrinsics and resolutions are replaced, the rest is copied unchanged.
+    """
+    document = copy.deepcopy(dict(template)) if template is not None else {"value0": {}}
+    calibration = document.setdefault("value0", {})
+    intrinsics = []
+    for index, camera in enumerate(cameras):
+        if not isinstance(camera, EUCM):
+            raise TypeError(f"camera {index}: Basalt files are written for EUCM cameras, got {type(camera).__name__}")
+        intrinsics.append(
+            {"camera_type": "eucm", "intrinsics": dict(zip(EUCM_PARAMETER_NAMES, camera.params.tolist(), strict=True))}
+        )
+    calibration["intrinsics"] = intrinsics
+    calibration["resolution"] = [[camera.width, camera.height] for camera in cameras]
+    path = Path(path)
+    path.write_text(json.dumps(document, indent=4))
+    return path

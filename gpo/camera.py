@@ -1,0 +1,351 @@
+"""Camera models: the extended unified camera model (EUCM) and the pinhole camera with
+OpenCV's radial-tangential distortion.
+
+Frames and units
+----------------
+Points are in the camera optical frame (REP-103): x right, y down, z forward, in metres (the
+models are scale free, so any consistent unit works). Pixels are (u, v) with u to the right and
+v down; the centre of the top-left pixel is (0, 0), as in OpenCV.
+
+Shapes and invalid input
+------------------------
+Every function is vectorised: points have shape ``(..., 3)`` and pixels ``(..., 2)``, so a
+single point, a list of points and a whole image grid all work. Each projection and unprojection
+returns its result together with a boolean mask of shape ``(...)``. Where the mask is false (the
+point is behind the lens, outside the model's valid region, or holds NaN or inf) the result is
+NaN, so an invalid point can never turn silently into a pixel. An array whose last axis has the
+wrong length raises a ``ValueError`` that says which shape was expected.
+
+References
+----------
+EUCM: B. Khomutenko, G. Garcia, P. Martinet, "An Enhanced Unified Camera Model", IEEE Robotics
+and Automation Letters 1(1), 2016; written here as in the first paper's eqs. 1-7 and as Basalt
+implements it. Pinhole: OpenCV's ``projectPoints`` model with (k1, k2, p1, p2[, k3]).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+EUCM_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "alpha", "beta")
+
+
+def _as_array(values, width: int, what: str) -> np.ndarray:
+    """``values`` as a float64 array whose last axis has length ``width``, else ValueError."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.ndim == 0 or array.shape[-1] != width:
+        raise ValueError(f"{what} must have shape (..., {width}), got shape {array.shape}")
+    return array
+
+
+def _check_finite(name: str, value: float) -> float:
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value}")
+    return value
+
+
+def _check_positive(name: str, value: float) -> float:
+    value = _check_finite(name, value)
+    if value <= 0:
+        raise ValueError(f"{name} must be > 0, got {value}")
+    return value
+
+
+def _check_image_size(camera) -> None:
+    """Check ``camera.width`` and ``camera.height`` and store them as int."""
+    for name in ("width", "height"):
+        value = getattr(camera, name)
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float, np.integer, np.floating))
+            or not (value > 0 and float(value).is_integer())
+        ):
+            raise ValueError(f"{name} must be a positive whole number of pixels, got {value!r}")
+        object.__setattr__(camera, name, int(value))
+
+
+class _Camera:
+    """What every camera model shares: pixel helpers over its ``width`` x ``height`` image."""
+
+    width: int
+    height: int
+
+    def in_image(self, uv) -> np.ndarray:
+        """True where pixel coordinates ``uv (..., 2)`` fall inside the image.
+
+        The image spans [-0.5, width - 0.5) x [-0.5, height - 0.5): pixel centres are integers.
+        """
+        uv = _as_array(uv, 2, "pixels")
+        with np.errstate(invalid="ignore"):
+            return (
+                (uv[..., 0] >= -0.5)
+                & (uv[..., 0] < self.width - 0.5)
+                & (uv[..., 1] >= -0.5)
+                & (uv[..., 1] < self.height - 0.5)
+            )
+
+    def pixel_grid(self) -> np.ndarray:
+        """The centre of every pixel, shape (height, width, 2), as (u, v)."""
+        u, v = np.meshgrid(np.arange(self.width, dtype=np.float64), np.arange(self.height, dtype=np.float64))
+        return np.stack([u, v], axis=-1)
+
+    def field_of_view(self) -> tuple[float, float, float]:
+        """Horizontal, vertical and diagonal field of view in radians.
+
+        Each is the sum of the angles from the optical axis of the rays through two opposite
+        border pixel centres: the left and right edge on the principal point's row, the top and
+        bottom edge on its column, and the top-left and bottom-right corners. A lens may see
+        more than 180 degrees. NaN where such a pixel has no valid ray.
+        """
+        cx, cy = self.principal_point
+        right, bottom = self.width - 1.0, self.height - 1.0
+        pairs = np.array([[[0.0, cy], [right, cy]], [[cx, 0.0], [cx, bottom]], [[0.0, 0.0], [right, bottom]]])
+        rays, _ = self.unproject(pairs)
+        off_axis = np.arccos(np.clip(rays[..., 2], -1.0, 1.0))
+        horizontal, vertical, diagonal = off_axis.sum(axis=-1)
+        return float(horizontal), float(vertical), float(diagonal)
+
+    @property
+    def principal_point(self) -> tuple[float, float]:
+        raise NotImplementedError
+
+    def unproject(self, uv) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class EUCM(_Camera):
+    """Extended unified camera model.
+
+    A point p = (x, y, z) is projected as (the first paper's eqs. 1-4)::
+
+        d = sqrt(beta * (x^2 + y^2) + z^2)
+        u = fx * x / (alpha * d + (1 - alpha) * z) + cx
+        v = fy * y / (alpha * d + (1 - alpha) * z) + cy
+
+    valid where ``z > -w * d`` with ``w = alpha / (1 - alpha)`` for alpha <= 0.5 and
+    ``w = (1 - alpha) / alpha`` otherwise. A pixel is unprojected (eqs. 5-7) as::
+
+        mx = (u - cx) / fx,  my = (v - cy) / fy,  r^2 = mx^2 + my^2
+        mz = (1 - beta * alpha^2 * r^2) / (alpha * sqrt(1 - (2 alpha - 1) * beta * r^2) + 1 - alpha)
+
+    and the ray (mx, my, mz) normalised, valid where alpha <= 0.5 or
+    ``r^2 <= 1 / (beta * (2 alpha - 1))``.
+
+    Parameters: ``fx, fy`` focal lengths and ``cx, cy`` principal point in pixels, ``alpha`` in
+    [0, 1] (0 is a pinhole), ``beta`` > 0 (1 is the unified model of Mei), ``width, height``
+    the image size in pixels.
+    """
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    alpha: float
+    beta: float
+    width: int
+    height: int
+
+    def __post_init__(self):
+        _check_image_size(self)
+        _check_positive("fx", self.fx)
+        _check_positive("fy", self.fy)
+        _check_finite("cx", self.cx)
+        _check_finite("cy", self.cy)
+        if not 0.0 <= _check_finite("alpha", self.alpha) <= 1.0:
+            raise ValueError(f"alpha must lie in [0, 1], got {self.alpha}")
+        _check_positive("beta", self.beta)
+
+    @classmethod
+    def from_params(cls, params, width: int, height: int) -> EUCM:
+        """Build from the parameter vector (fx, fy, cx, cy, alpha, beta), the order of ``params``."""
+        params = np.asarray(params, dtype=np.float64)
+        if params.shape != (6,):
+            raise ValueError(f"EUCM parameters must be (fx, fy, cx, cy, alpha, beta), got shape {params.shape}")
+        return cls(*params.tolist(), width, height)
+
+    @property
+    def params(self) -> np.ndarray:
+        """The parameter vector (fx, fy, cx, cy, alpha, beta)."""
+        return np.array([self.fx, self.fy, self.cx, self.cy, self.alpha, self.beta])
+
+    @property
+    def principal_point(self) -> tuple[float, float]:
+        return self.cx, self.cy
+
+    @property
+    def _w(self) -> float:
+        alpha = self.alpha
+        return alpha / (1.0 - alpha) if alpha <= 0.5 else (1.0 - alpha) / alpha
+
+    def project(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels ``(..., 2)`` and validity mask ``(...)`` of camera-frame points ``(..., 3)``."""
+        points = _as_array(points, 3, "points")
+        x, y, z = np.moveaxis(points, -1, 0)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            d = np.sqrt(self.beta * (x * x + y * y) + z * z)
+            denominator = self.alpha * d + (1.0 - self.alpha) * z
+            valid = np.isfinite(d) & (z > -self._w * d) & (denominator > 0)
+            uv = np.stack([self.fx * x / denominator + self.cx, self.fy * y / denominator + self.cy], axis=-1)
+        uv[~valid] = np.nan
+        return uv, valid
+
+    def project_jacobians(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Jacobians of ``project`` at ``points (..., 3)``.
+
+        Returns ``d(u, v)/d(x, y, z)`` of shape ``(..., 2, 3)`` and
+        ``d(u, v)/d(fx, fy, cx, cy, alpha, beta)`` of shape ``(..., 2, 6)``; NaN where the
+        projection is invalid.
+        """
+        points = _as_array(points, 3, "points")
+        _, valid = self.project(points)
+        x, y, z = np.moveaxis(points, -1, 0)
+        a, b = self.alpha, self.beta
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            d = np.sqrt(b * (x * x + y * y) + z * z)
+            den = a * d + (1.0 - a) * z
+            mx, my = x / den, y / den
+            # derivatives of the denominator with respect to x, y, z, alpha and beta
+            dden = np.stack([a * b * x / d, a * b * y / d, a * z / d + (1.0 - a)], axis=-1)
+            dden_dalpha = d - z
+            dden_dbeta = a * (x * x + y * y) / (2.0 * d)
+
+            j_point = np.zeros((*points.shape[:-1], 2, 3))
+            j_point[..., 0, :] = -self.fx * (mx / den)[..., None] * dden
+            j_point[..., 1, :] = -self.fy * (my / den)[..., None] * dden
+            j_point[..., 0, 0] += self.fx / den
+            j_point[..., 1, 1] += self.fy / den
+
+            j_params = np.zeros((*points.shape[:-1], 2, 6))
+            j_params[..., 0, 0] = mx
+            j_params[..., 1, 1] = my
+            j_params[..., 0, 2] = 1.0
+            j_params[..., 1, 3] = 1.0
+            j_params[..., 0, 4] = -self.fx * mx / den * dden_dalpha
+            j_params[..., 1, 4] = -self.fy * my / den * dden_dalpha
+            j_params[..., 0, 5] = -self.fx * mx / den * dden_dbeta
+            j_params[..., 1, 5] = -self.fy * my / den * dden_dbeta
+        j_point[~valid] = np.nan
+        j_params[~valid] = np.nan
+        return j_point, j_params
+
+    def unproject(self, uv) -> tuple[np.ndarray, np.ndarray]:
+        """Unit rays ``(..., 3)`` in the camera frame and validity mask ``(...)`` of pixels ``(..., 2)``."""
+        uv = _as_array(uv, 2, "pixels")
+        a, b = self.alpha, self.beta
+        mx = (uv[..., 0] - self.cx) / self.fx
+        my = (uv[..., 1] - self.cy) / self.fy
+        r2 = mx * mx + my * my
+        valid = np.isfinite(r2)
+        if a > 0.5:
+            with np.errstate(invalid="ignore"):
+                valid &= r2 <= 1.0 / (b * (2.0 * a - 1.0))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mz = (1.0 - b * a * a * r2) / (a * np.sqrt(1.0 - (2.0 * a - 1.0) * b * r2) + 1.0 - a)
+            rays = np.stack([mx, my, mz], axis=-1) / np.sqrt(r2 + mz * mz)[..., None]
+        rays[~valid] = np.nan
+        return rays, valid
+
+
+@dataclass(frozen=True)
+class Pinhole(_Camera):
+    """Pinhole camera with OpenCV's radial-tangential distortion.
+
+    With (x', y') = (x / z, y / z) and r^2 = x'^2 + y'^2, the distorted normalised point is::
+
+        x'' = x' (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x' y' + p2 (r^2 + 2 x'^2)
+        y'' = y' (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y'^2) + 2 p2 x' y'
+
+    and (u, v) = (fx x'' + cx, fy y'' + cy), as ``cv2.projectPoints``. A projection is valid
+    where z > 0 and r lies where the radial polynomial still grows with r (beyond that radius
+    distinct rays would land on the same pixel).
+
+    ``dist`` is (k1, k2, p1, p2) or (k1, k2, p1, p2, k3), OpenCV's order.
+    """
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    dist: tuple[float, ...]
+    width: int
+    height: int
+
+    def __post_init__(self):
+        _check_image_size(self)
+        _check_positive("fx", self.fx)
+        _check_positive("fy", self.fy)
+        _check_finite("cx", self.cx)
+        _check_finite("cy", self.cy)
+        dist = tuple(float(c) for c in np.ravel(self.dist))
+        if len(dist) not in (4, 5):
+            raise ValueError(f"dist must be (k1, k2, p1, p2) or (k1, k2, p1, p2, k3), got {len(dist)} values")
+        for name, value in zip(("k1", "k2", "p1", "p2", "k3"), dist, strict=False):
+            _check_finite(name, value)
+        object.__setattr__(self, "dist", dist)
+
+    @property
+    def principal_point(self) -> tuple[float, float]:
+        return self.cx, self.cy
+
+    @property
+    def camera_matrix(self) -> np.ndarray:
+        """The 3x3 intrinsic matrix K."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    @property
+    def max_radius(self) -> float:
+        """Largest undistorted radius r = |(x/z, y/z)| up to which the radial distortion grows with r.
+
+        The radial map r -> r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at the smallest
+        positive root s = r^2 of 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3; infinite when there is none.
+        """
+        k1, k2, k3 = self.dist[0], self.dist[1], self.dist[4] if len(self.dist) == 5 else 0.0
+        roots = np.roots(np.trim_zeros([7.0 * k3, 5.0 * k2, 3.0 * k1, 1.0], "f"))
+        positive = [s.real for s in roots if abs(s.imag) < 1e-12 and s.real > 0]
+        return math.sqrt(min(positive)) if positive else math.inf
+
+    def project(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels ``(..., 2)`` and validity mask ``(...)`` of camera-frame points ``(..., 3)``."""
+        points = _as_array(points, 3, "points")
+        k1, k2, p1, p2, k3 = (*self.dist, 0.0)[:5]
+        x, y, z = np.moveaxis(points, -1, 0)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            xn, yn = x / z, y / z
+            r2 = xn * xn + yn * yn
+            valid = np.isfinite(r2) & (z > 0) & (r2 <= self.max_radius**2)
+            radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+            xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn)
+            yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn
+            uv = np.stack([self.fx * xd + self.cx, self.fy * yd + self.cy], axis=-1)
+        uv[~valid] = np.nan
+        return uv, valid
+
+    def unproject(self, uv) -> tuple[np.ndarray, np.ndarray]:
+        """Unit rays ``(..., 3)`` and validity mask ``(...)`` of pixels ``(..., 2)``.
+
+        The distortion is inverted iteratively by ``cv2.undistortPoints``; a pixel is valid
+        where the ray found projects back onto it within 1e-6 px.
+        """
+        uv = _as_array(uv, 2, "pixels")
+        flat = uv.reshape(-1, 2)
+        finite = np.all(np.isfinite(flat), axis=-1)
+        normalised = np.full_like(flat, np.nan)
+        if finite.any():
+            criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
+            found = cv2.undistortPoints(
+                flat[finite].reshape(-1, 1, 2), self.camera_matrix, np.array(self.dist), criteria=criteria
+            )
+            normalised[finite] = found.reshape(-1, 2)
+        rays = np.concatenate([normalised, np.ones((len(flat), 1))], axis=-1)
+        rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
+        back, valid = self.project(rays)
+        with np.errstate(invalid="ignore"):
+            valid &= np.linalg.norm(back - flat, axis=-1) <= 1e-6
+        rays[~valid] = np.nan
+        return rays.reshape((*uv.shape[:-1], 3)), valid.reshape(uv.shape[:-1])
