@@ -28,7 +28,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 EUCM_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "alpha", "beta")
@@ -310,42 +309,67 @@ class Pinhole(_Camera):
         positive = [s.real for s in roots if abs(s.imag) < 1e-12 and s.real > 0]
         return math.sqrt(min(positive)) if positive else math.inf
 
+    def _distort(self, xn: np.ndarray, yn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Distorted normalised coordinates of (xn, yn) = (x/z, y/z), and the 2x2 Jacobian (..., 2, 2)."""
+        k1, k2, p1, p2, k3 = (*self.dist, 0.0)[:5]
+        r2 = xn * xn + yn * yn
+        radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        dradial = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3)  # d radial / d r^2
+        xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn)
+        yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn
+        cross = 2.0 * xn * yn * dradial + 2.0 * p1 * xn + 2.0 * p2 * yn
+        jacobian = np.stack(
+            [
+                np.stack([radial + 2.0 * xn * xn * dradial + 2.0 * p1 * yn + 6.0 * p2 * xn, cross], axis=-1),
+                np.stack([cross, radial + 2.0 * yn * yn * dradial + 6.0 * p1 * yn + 2.0 * p2 * xn], axis=-1),
+            ],
+            axis=-2,
+        )
+        return xd, yd, jacobian
+
     def project(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Pixels ``(..., 2)`` and validity mask ``(...)`` of camera-frame points ``(..., 3)``."""
         points = _as_array(points, 3, "points")
-        k1, k2, p1, p2, k3 = (*self.dist, 0.0)[:5]
         x, y, z = np.moveaxis(points, -1, 0)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             xn, yn = x / z, y / z
             r2 = xn * xn + yn * yn
             valid = np.isfinite(r2) & (z > 0) & (r2 <= self.max_radius**2)
-            radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
-            xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn)
-            yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn
+            xd, yd, _ = self._distort(xn, yn)
             uv = np.stack([self.fx * xd + self.cx, self.fy * yd + self.cy], axis=-1)
         uv[~valid] = np.nan
         return uv, valid
 
-    def unproject(self, uv) -> tuple[np.ndarray, np.ndarray]:
+    def unproject(self, uv, iterations: int = 20) -> tuple[np.ndarray, np.ndarray]:
         """Unit rays ``(..., 3)`` and validity mask ``(...)`` of pixels ``(..., 2)``.
 
-        The distortion is inverted iteratively by ``cv2.undistortPoints``; a pixel is valid
-        where the ray found projects back onto it within 1e-6 px.
+        The distortion is inverted by Newton's method from the distorted point; a pixel is valid
+        where the ray found lies inside the monotonic radius and projects back onto the pixel
+        within 1e-6 px.
         """
         uv = _as_array(uv, 2, "pixels")
-        flat = uv.reshape(-1, 2)
-        finite = np.all(np.isfinite(flat), axis=-1)
-        normalised = np.full_like(flat, np.nan)
-        if finite.any():
-            criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
-            found = cv2.undistortPoints(
-                flat[finite].reshape(-1, 1, 2), self.camera_matrix, np.array(self.dist), criteria=criteria
-            )
-            normalised[finite] = found.reshape(-1, 2)
-        rays = np.concatenate([normalised, np.ones((len(flat), 1))], axis=-1)
-        rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
-        back, valid = self.project(rays)
-        with np.errstate(invalid="ignore"):
-            valid &= np.linalg.norm(back - flat, axis=-1) <= 1e-6
+        target = np.stack([(uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy], axis=-1)
+        normalised = target.copy()
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for _ in range(iterations):
+                xd, yd, jacobian = self._distort(normalised[..., 0], normalised[..., 1])
+                residual = np.stack([xd, yd], axis=-1) - target
+                if not np.any(np.abs(residual) > 1e-13):
+                    break
+                determinant = jacobian[..., 0, 0] * jacobian[..., 1, 1] - jacobian[..., 0, 1] * jacobian[..., 1, 0]
+                normalised[..., 0] -= (
+                    jacobian[..., 1, 1] * residual[..., 0] - jacobian[..., 0, 1] * residual[..., 1]
+                ) / determinant
+                normalised[..., 1] -= (
+                    jacobian[..., 0, 0] * residual[..., 1] - jacobian[..., 1, 0] * residual[..., 0]
+                ) / determinant
+            rays = np.concatenate([normalised, np.ones((*normalised.shape[:-1], 1))], axis=-1)
+            rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
+            back, valid = self.project(rays)
+            valid &= np.all(np.abs(back - uv) <= 1e-6, axis=-1)
         rays[~valid] = np.nan
-        return rays.reshape((*uv.shape[:-1], 3)), valid.reshape(uv.shape[:-1])
+        return rays, valid
+
+
+T265_LIKE = EUCM(fx=286.0, fy=286.0, cx=424.0, cy=400.0, alpha=0.6, beta=1.1, width=848, height=800)
+"""An EUCM like the Intel RealSense T265's fisheye (848 x 800 pixels), the default of the examples."""

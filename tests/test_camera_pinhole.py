@@ -35,6 +35,17 @@ def test_unproject_project_round_trip_over_every_pixel():
     assert np.max(np.abs(back - pixels)) < 1e-6
 
 
+def test_rays_match_cv2_undistort_points():
+    pixels = np.random.default_rng(1).uniform([0, 0], [751, 479], (1_000, 2))
+    rays, valid = DOWNWARD.unproject(pixels)
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-14)
+    normalised = cv2.undistortPoints(
+        pixels.reshape(-1, 1, 2), DOWNWARD.camera_matrix, np.array(DOWNWARD.dist), criteria=criteria
+    ).reshape(-1, 2)
+    assert valid.all()
+    np.testing.assert_allclose(rays[:, :2] / rays[:, 2:], normalised, atol=1e-9)
+
+
 def test_beyond_the_monotonic_radius_is_invalid():
     # r (1 + k1 r^2) with k1 = -0.25 stops growing at r^2 = 1 / (3 * 0.25)
     camera = Pinhole(fx=100.0, fy=100.0, cx=50.0, cy=50.0, dist=(-0.25, 0.0, 0.0, 0.0), width=100, height=100)
@@ -65,3 +76,13 @@ def test_invalid_parameters_raise_naming_them(change, message):
     params.update(change)
     with pytest.raises(ValueError, match=message):
         Pinhole(**params)
+
+
+def test_field_of_view_of_an_undistorted_pinhole_is_the_arctangent_sum():
+    camera = Pinhole(fx=500.0, fy=400.0, cx=300.0, cy=200.0, dist=(0.0,) * 4, width=640, height=480)
+    horizontal, vertical, diagonal = camera.field_of_view()
+    assert horizontal == pytest.approx(np.arctan(300 / 500) + np.arctan(339 / 500), abs=1e-12)
+    assert vertical == pytest.approx(np.arctan(200 / 400) + np.arctan(279 / 400), abs=1e-12)
+    assert diagonal == pytest.approx(
+        np.arctan(np.hypot(300 / 500, 200 / 400)) + np.arctan(np.hypot(339 / 500, 279 / 400)), abs=1e-12
+    )

@@ -1,0 +1,66 @@
+"""The ``python -m gpo`` command line.
+
+python -m gpo demo [--out DIR]    figures and tables of what the suite holds, written to DIR
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+from gpo.camera import EUCM, T265_LIKE, Pinhole
+from gpo.plots import draw_projection_curves, draw_room_in_image, field_of_view_text
+
+
+def demo(out: Path) -> list[Path]:
+    """Write the camera-model figures and a field-of-view table into ``out``; return the files."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+
+    fig = Figure(figsize=(7.0, 6.6))
+    ax = fig.subplots()
+    draw_room_in_image(T265_LIKE, ax=ax, height=0.12)
+    ax.set_title("A room seen by a T265-like EUCM fisheye 0.12 m above the floor")
+    written.append(out / "fisheye_room_grid.png")
+    fig.savefig(written[-1], dpi=110, bbox_inches="tight")
+
+    f = T265_LIKE.fx
+    cameras = {
+        f"EUCM alpha={alpha}, beta={beta}": EUCM(f, f, T265_LIKE.cx, T265_LIKE.cy, alpha, beta, 848, 800)
+        for alpha, beta in ((0.6, 1.1), (0.5, 1.0), (0.3, 1.0), (0.0, 1.0))
+    }
+    cameras["pinhole (no distortion)"] = Pinhole(f, f, T265_LIKE.cx, T265_LIKE.cy, (0.0,) * 4, 848, 800)
+    fig = Figure(figsize=(7.0, 4.2))
+    ax = fig.subplots()
+    draw_projection_curves(cameras, ax=ax)
+    ax.axhline(T265_LIKE.width - T265_LIKE.cx, color="k", lw=0.8, ls=":")
+    ax.set_ylim(0, 1200)
+    ax.set_title(f"How far from the image centre a ray lands (f = {f:.0f} px); dotted: image edge")
+    written.append(out / "projection_curves.png")
+    fig.savefig(written[-1], dpi=110, bbox_inches="tight")
+
+    written.append(out / "field_of_view.txt")
+    written[-1].write_text("".join(f"{label}: {field_of_view_text(camera)}\n" for label, camera in cameras.items()))
+    return written
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m gpo", description=__doc__.splitlines()[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    demo_parser = commands.add_parser("demo", help="write the suite's figures and tables into a folder")
+    demo_parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default: out)")
+    args = parser.parse_args(argv)
+
+    if args.command == "demo":
+        written = demo(args.out)
+        print(f"wrote {len(written)} files to {args.out.resolve()}:")
+        for path in written:
+            print(f"  {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
