@@ -1,0 +1,141 @@
+"""Timestamped poses, and the TUM trajectory file format that every SLAM tool (and evo) reads.
+
+A ``Trajectory`` holds the poses of one frame (``child_frame_id``, e.g. ``base_link``) in another
+(``frame_id``, e.g. ``odom``), as ROS does: stamps in integer nanoseconds, positions in metres,
+orientations as unit quaternions in ROS order (x, y, z, w).
+
+TUM format: one pose per line, ``t tx ty tz qx qy qz qw``, t in seconds; lines starting with ``#``
+are comments. Stamps are written with all nine decimals, so a round trip keeps every nanosecond.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+NS_PER_S = 1_000_000_000
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """Poses of ``child_frame_id`` in ``frame_id`` at ``stamps_ns``.
+
+    ``stamps_ns`` (N,) int64 nanoseconds, non-decreasing; ``positions`` (N, 3) metres;
+    ``quaternions`` (N, 4) as (x, y, z, w), normalised on construction where their length is
+    not 1 to rounding.
+    """
+
+    stamps_ns: np.ndarray
+    positions: np.ndarray
+    quaternions: np.ndarray
+    frame_id: str = "world"
+    child_frame_id: str = "base_link"
+
+    def __post_init__(self):
+        stamps = np.asarray(self.stamps_ns)
+        if stamps.ndim != 1 or not (np.issubdtype(stamps.dtype, np.integer) or stamps.size == 0):
+            raise ValueError(f"stamps_ns must be a 1-D array of integer nanoseconds, got {stamps.dtype} {stamps.shape}")
+        stamps = stamps.astype(np.int64)
+        n = len(stamps)
+        positions = np.asarray(self.positions, dtype=np.float64).reshape(-1, 3) if n else np.zeros((0, 3))
+        quaternions = np.asarray(self.quaternions, dtype=np.float64).reshape(-1, 4) if n else np.zeros((0, 4))
+        if len(positions) != n or len(quaternions) != n:
+            raise ValueError(
+                f"a trajectory needs as many positions and quaternions as stamps: "
+                f"{n} stamps, {len(positions)} positions, {len(quaternions)} quaternions"
+            )
+        if not (np.isfinite(positions).all() and np.isfinite(quaternions).all()):
+            raise ValueError("positions and quaternions must be finite numbers")
+        backwards = np.flatnonzero(np.diff(stamps) < 0)
+        if backwards.size:
+            i = backwards[0]
+            raise ValueError(f"stamps go backwards at pose {i + 1}: {stamps[i]} ns then {stamps[i + 1]} ns")
+        norms = np.linalg.norm(quaternions, axis=1, keepdims=True)
+        if np.any(norms < 1e-9):
+            raise ValueError(f"quaternion {int(np.argmin(norms))} has zero length")
+        object.__setattr__(self, "stamps_ns", stamps)
+        object.__setattr__(self, "positions", positions)
+        # normalise only what is off by more than rounding, so that file round trips stay exact
+        quaternions = np.where(np.abs(norms - 1.0) > 1e-12, quaternions / norms, quaternions)
+        object.__setattr__(self, "quaternions", quaternions)
+
+    def __len__(self) -> int:
+        return len(self.stamps_ns)
+
+    @classmethod
+    def from_planar(
+        cls, stamps_ns, x, y, yaw, z: float = 0.0, frame_id: str = "world", child_frame_id: str = "base_link"
+    ) -> Trajectory:
+        """A trajectory in the plane: position (x, y, z) in metres, heading ``yaw`` in radians about +z."""
+        x, y, yaw = (np.asarray(a, dtype=np.float64) for a in (x, y, yaw))
+        positions = np.column_stack([x, y, np.full_like(x, z)])
+        quaternions = Rotation.from_euler("z", np.atleast_1d(yaw)[:, None]).as_quat()
+        return cls(np.asarray(stamps_ns), positions, quaternions, frame_id, child_frame_id)
+
+    @property
+    def times(self) -> np.ndarray:
+        """Stamps in float seconds, shape (N,)."""
+        return self.stamps_ns * 1e-9
+
+    @property
+    def rotations(self) -> Rotation:
+        """Orientations as a scipy ``Rotation`` of N rotations."""
+        return Rotation.from_quat(self.quaternions)
+
+    @property
+    def yaw(self) -> np.ndarray:
+        """Heading about +z in radians, in (-pi, pi], shape (N,)."""
+        return self.rotations.as_euler("ZYX")[:, 0]
+
+    @property
+    def path_length(self) -> float:
+        """Distance travelled along the positions, metres."""
+        return float(np.linalg.norm(np.diff(self.positions, axis=0), axis=1).sum())
+
+    def write_tum(self, path) -> Path:
+        """Write as a TUM file; return the path."""
+        path = Path(path)
+        seconds, nanoseconds = np.divmod(self.stamps_ns, NS_PER_S)
+        lines = [f"# {self.frame_id} -> {self.child_frame_id}: t tx ty tz qx qy qz qw\n"]
+        for s, ns, p, q in zip(seconds, nanoseconds, self.positions, self.quaternions, strict=True):
+            values = " ".join(repr(float(v)) for v in (*p, *q))
+            lines.append(f"{s}.{ns:09d} {values}\n")
+        path.write_text("".join(lines))
+        return path
+
+    @classmethod
+    def read_tum(cls, path, frame_id: str = "world", child_frame_id: str = "base_link") -> Trajectory:
+        """Read a TUM file (8 numbers a line; ``#`` comments and blank lines skipped)."""
+        path = Path(path)
+        stamps, values = [], []
+        for number, line in enumerate(path.read_text().splitlines(), start=1):
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            fields = line.replace(",", " ").split()
+            if len(fields) != 8:
+                raise ValueError(
+                    f"{path}:{number}: a TUM line has 8 numbers (t tx ty tz qx qy qz qw), got {len(fields)}"
+                )
+            try:
+                stamps.append(_seconds_text_to_ns(fields[0]))
+                values.append([float(v) for v in fields[1:]])
+            except ValueError:
+                raise ValueError(f"{path}:{number}: not a number in {line!r}") from None
+        values = np.array(values).reshape(-1, 7)
+        return cls(np.array(stamps, dtype=np.int64), values[:, :3], values[:, 3:], frame_id, child_frame_id)
+
+
+def _seconds_text_to_ns(text: str) -> int:
+    """Exact integer nanoseconds of a decimal number of seconds such as ``1403715273.262142976``."""
+    if "e" in text.lower():
+        return round(float(text) * NS_PER_S)
+    whole, _, fraction = text.partition(".")
+    sign = -1 if whole.startswith("-") else 1
+    fraction = (fraction + "000000000")[:9]
+    if not (whole.lstrip("+-").isdigit() or whole.lstrip("+-") == "") or not fraction.isdigit():
+        raise ValueError(text)
+    return int(whole or "0") * NS_PER_S + sign * int(fraction)

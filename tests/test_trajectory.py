@@ -1,0 +1,49 @@
+"""Trajectories and TUM files: exact round trips, the real rpg_trajectory_evaluation files, bad input."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from gpo.trajectory import Trajectory
+
+
+def test_tum_round_trip_keeps_every_nanosecond_and_value(tmp_path):
+    rng = np.random.default_rng(0)
+    stamps = np.cumsum(rng.integers(1, 10**8, 500)) + 1_700_000_000 * 10**9
+    trajectory = Trajectory(stamps, rng.normal(size=(500, 3)), Rotation.random(500, rng=1).as_quat(), "odom", "cam")
+    again = Trajectory.read_tum(trajectory.write_tum(tmp_path / "t.tum"), "odom", "cam")
+    np.testing.assert_array_equal(again.stamps_ns, trajectory.stamps_ns)
+    np.testing.assert_array_equal(again.positions, trajectory.positions)
+    np.testing.assert_array_equal(again.quaternions, trajectory.quaternions)
+
+
+def test_planar_heading_and_length():
+    yaw = np.array([0.0, 0.5, -3.0, np.pi])
+    trajectory = Trajectory.from_planar(np.arange(4), [0, 3, 3, 0], [0, 4, 0, 0], yaw)
+    np.testing.assert_allclose(trajectory.yaw, [0.0, 0.5, -3.0, np.pi], atol=1e-12)
+    assert trajectory.path_length == pytest.approx(5 + 4 + 3)
+
+
+def test_reads_the_real_groundtruth_file(real_data):
+    folder = real_data / "rpg_trajectory_evaluation/results/euroc_vislam_mono/laptop/vislam_ba/laptop_vislam_ba_V1_02"
+    path = folder / "stamped_groundtruth.txt"
+    trajectory = Trajectory.read_tum(path)
+    first = next(line for line in path.read_text().splitlines() if not line.startswith("#")).split()
+    assert len(trajectory) == sum(1 for line in path.read_text().splitlines() if line and not line.startswith("#"))
+    assert trajectory.stamps_ns[0] == round(float(first[0]) * 1e9)
+    np.testing.assert_array_equal(trajectory.positions[0], [float(v) for v in first[1:4]])
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("1.0 2 3\n", "8 numbers"),
+        ("1.0 0 0 0 0 0 0 one\n", "not a number"),
+        ("2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", "backwards"),
+    ],
+)
+def test_bad_tum_files_name_the_line(tmp_path, content, message):
+    path = tmp_path / "bad.tum"
+    path.write_text(content)
+    with pytest.raises(ValueError, match=message):
+        Trajectory.read_tum(path)
