@@ -309,23 +309,21 @@ class Pinhole(_Camera):
         positive = [s.real for s in roots if abs(s.imag) < 1e-12 and s.real > 0]
         return math.sqrt(min(positive)) if positive else math.inf
 
-    def _distort(self, xn: np.ndarray, yn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Distorted normalised coordinates of (xn, yn) = (x/z, y/z), and the 2x2 Jacobian (..., 2, 2)."""
+    def _distort(self, xn: np.ndarray, yn: np.ndarray):
+        """Distorted normalised coordinates (xd, yd) of (xn, yn) = (x/z, y/z), and their Jacobian.
+
+        The Jacobian d(xd, yd)/d(xn, yn) is symmetric; it is returned as its entries (j_xx, j_xy, j_yy).
+        """
         k1, k2, p1, p2, k3 = (*self.dist, 0.0)[:5]
         r2 = xn * xn + yn * yn
         radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
         dradial = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3)  # d radial / d r^2
         xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn)
         yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn
-        cross = 2.0 * xn * yn * dradial + 2.0 * p1 * xn + 2.0 * p2 * yn
-        jacobian = np.stack(
-            [
-                np.stack([radial + 2.0 * xn * xn * dradial + 2.0 * p1 * yn + 6.0 * p2 * xn, cross], axis=-1),
-                np.stack([cross, radial + 2.0 * yn * yn * dradial + 6.0 * p1 * yn + 2.0 * p2 * xn], axis=-1),
-            ],
-            axis=-2,
-        )
-        return xd, yd, jacobian
+        j_xx = radial + 2.0 * xn * xn * dradial + 2.0 * p1 * yn + 6.0 * p2 * xn
+        j_xy = 2.0 * xn * yn * dradial + 2.0 * p1 * xn + 2.0 * p2 * yn
+        j_yy = radial + 2.0 * yn * yn * dradial + 6.0 * p1 * yn + 2.0 * p2 * xn
+        return xd, yd, (j_xx, j_xy, j_yy)
 
     def project(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Pixels ``(..., 2)`` and validity mask ``(...)`` of camera-frame points ``(..., 3)``."""
@@ -348,22 +346,18 @@ class Pinhole(_Camera):
         within 1e-6 px.
         """
         uv = _as_array(uv, 2, "pixels")
-        target = np.stack([(uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy], axis=-1)
-        normalised = target.copy()
+        target_x, target_y = (uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy
+        xn, yn = target_x.copy(), target_y.copy()
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             for _ in range(iterations):
-                xd, yd, jacobian = self._distort(normalised[..., 0], normalised[..., 1])
-                residual = np.stack([xd, yd], axis=-1) - target
-                if not np.any(np.abs(residual) > 1e-13):
+                xd, yd, (j_xx, j_xy, j_yy) = self._distort(xn, yn)
+                error_x, error_y = xd - target_x, yd - target_y
+                if not (np.any(np.abs(error_x) > 1e-13) or np.any(np.abs(error_y) > 1e-13)):
                     break
-                determinant = jacobian[..., 0, 0] * jacobian[..., 1, 1] - jacobian[..., 0, 1] * jacobian[..., 1, 0]
-                normalised[..., 0] -= (
-                    jacobian[..., 1, 1] * residual[..., 0] - jacobian[..., 0, 1] * residual[..., 1]
-                ) / determinant
-                normalised[..., 1] -= (
-                    jacobian[..., 0, 0] * residual[..., 1] - jacobian[..., 1, 0] * residual[..., 0]
-                ) / determinant
-            rays = np.concatenate([normalised, np.ones((*normalised.shape[:-1], 1))], axis=-1)
+                determinant = j_xx * j_yy - j_xy * j_xy
+                xn -= (j_yy * error_x - j_xy * error_y) / determinant
+                yn -= (j_xx * error_y - j_xy * error_x) / determinant
+            rays = np.stack([xn, yn, np.ones_like(xn)], axis=-1)
             rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
             back, valid = self.project(rays)
             valid &= np.all(np.abs(back - uv) <= 1e-6, axis=-1)

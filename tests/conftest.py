@@ -1,19 +1,25 @@
-"""Shared test settings: deterministic hypothesis runs and the path to the real calibration files."""
+"""Shared test settings: deterministic hypothesis runs, and real data files fetched or the test skipped."""
 
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 from hypothesis import settings
 
+from gpo import datasets
+
 settings.register_profile("gpo", derandomize=True, max_examples=200, deadline=None, print_blob=True)
 settings.load_profile("gpo")
 
-REAL_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "real_data"
-
 
 @pytest.fixture
-def real_data() -> Path:
-    """``../shared/real_data``; the test is skipped, with the reason, where it is absent."""
-    if not REAL_DATA.is_dir():
-        pytest.skip(f"real calibration files not found at {REAL_DATA}")
-    return REAL_DATA
+def fetch_or_skip() -> Callable[[str], Path]:
+    """`gpo.datasets.fetch`, skipping the test, with the reason, when the file cannot be had."""
+
+    def fetch(name: str) -> Path:
+        try:
+            return datasets.fetch(name)
+        except datasets.DatasetUnavailable as error:
+            pytest.skip(str(error))
+
+    return fetch

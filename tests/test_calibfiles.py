@@ -12,8 +12,8 @@ BASALT_EUCM_FILES = ["tumvi_512_eucm_calib.json", "euroc_eucm_calib.json"]
 
 
 @pytest.mark.parametrize("name", BASALT_EUCM_FILES)
-def test_basalt_files_load_with_their_published_values(real_data, name):
-    path = real_data / "basalt" / "data" / name
+def test_basalt_files_load_with_their_published_values(fetch_or_skip, name):
+    path = fetch_or_skip(f"basalt/data/{name}")
     published = json.loads(path.read_text())["value0"]
     cameras = load_basalt(path)
     assert len(cameras) == len(published["intrinsics"]) == 2
@@ -26,8 +26,8 @@ def test_basalt_files_load_with_their_published_values(real_data, name):
 
 
 @pytest.mark.parametrize("name", BASALT_EUCM_FILES)
-def test_basalt_file_round_trips_unchanged_through_our_basalt_writer(real_data, tmp_path, name):
-    path = real_data / "basalt" / "data" / name
+def test_basalt_file_round_trips_unchanged_through_our_basalt_writer(fetch_or_skip, tmp_path, name):
+    path = fetch_or_skip(f"basalt/data/{name}")
     original = json.loads(path.read_text())
     written = save_basalt(tmp_path / name, load_basalt(path), template=original)
     assert json.loads(written.read_text()) == original
@@ -35,8 +35,8 @@ def test_basalt_file_round_trips_unchanged_through_our_basalt_writer(real_data, 
 
 
 @pytest.mark.parametrize("name", BASALT_EUCM_FILES)
-def test_basalt_cameras_round_trip_unchanged_through_kalibr(real_data, tmp_path, name):
-    cameras = load_basalt(real_data / "basalt" / "data" / name)
+def test_basalt_cameras_round_trip_unchanged_through_kalibr(fetch_or_skip, tmp_path, name):
+    cameras = load_basalt(fetch_or_skip(f"basalt/data/{name}"))
     named = {f"cam{i}": camera for i, camera in enumerate(cameras)}
     written = save_kalibr(tmp_path / "camchain.yaml", named, rostopics={"cam0": "/cam0/image_raw"})
     assert load_kalibr(written) == named
@@ -45,8 +45,8 @@ def test_basalt_cameras_round_trip_unchanged_through_kalibr(real_data, tmp_path,
     assert document["cam0"]["rostopic"] == "/cam0/image_raw" and "rostopic" not in document["cam1"]
 
 
-def test_unsupported_basalt_model_is_named(real_data):
-    path = real_data / "basalt" / "data" / "t265_kb4_calib.json"
+def test_unsupported_basalt_model_is_named(fetch_or_skip):
+    path = fetch_or_skip("basalt/data/t265_kb4_calib.json")
     with pytest.raises(ValueError, match=r"t265_kb4_calib\.json, camera 0: unsupported camera model 'kb4'"):
         load_basalt(path)
 

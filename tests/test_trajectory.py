@@ -24,9 +24,9 @@ def test_planar_heading_and_length():
     assert trajectory.path_length == pytest.approx(5 + 4 + 3)
 
 
-def test_reads_the_real_groundtruth_file(real_data):
-    folder = real_data / "rpg_trajectory_evaluation/results/euroc_vislam_mono/laptop/vislam_ba/laptop_vislam_ba_V1_02"
-    path = folder / "stamped_groundtruth.txt"
+def test_reads_the_real_groundtruth_file(fetch_or_skip):
+    run = "rpg_trajectory_evaluation/results/euroc_vislam_mono/laptop/vislam_ba/laptop_vislam_ba_V1_02"
+    path = fetch_or_skip(f"{run}/stamped_groundtruth.txt")
     trajectory = Trajectory.read_tum(path)
     first = next(line for line in path.read_text().splitlines() if not line.startswith("#")).split()
     assert len(trajectory) == sum(1 for line in path.read_text().splitlines() if line and not line.startswith("#"))

@@ -1,0 +1,192 @@
+"""Real calibration files, images and trajectories from public repositories, fetched on first use.
+
+Every file is a byte-identical copy of a blob in a public GitHub repository at a pinned commit
+(Kalibr, camera-intrinsic-model-rs, Basalt, rpg_trajectory_evaluation), downloaded with pooch from
+``raw.githubusercontent.com`` and checked against its sha256. The data are never committed to this
+project: each keeps its repository's licence (the LICENSE files are in the registry too) and the
+caveats named in the loaders' docstrings.
+
+A file's name is ``"<repo-name>/<path in that repository>"``, e.g. ``"basalt/data/tumvi_512_eucm_calib.json"``,
+and it is stored under that same relative path in the cache folder. The cache folder is
+``pooch.os_cache("gpo")``, or the folder named by the environment variable ``GPO_DATA_DIR``: point it at a
+folder that already holds copies in this layout and nothing is downloaded (CI points it at
+``../shared/real_data`` to work offline).
+"""
+
+import difflib
+import importlib.util
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pooch
+
+#: repository folder name -> (GitHub owner/repository, pinned commit)
+_REPOSITORIES = {
+    "kalibr": ("ethz-asl/kalibr", "1f60227442d25e36365ef5f72cd80b9666d73467"),
+    "camera-intrinsic-model-rs": ("powei-lin/camera-intrinsic-model-rs", "f723eb8316da0858ceecf3db257d7c5992f6aeed"),
+    "basalt": ("VladyslavUsenko/basalt", "0f3b2b52c807f70ff4e2973ce253c73329eea7bc"),
+    "rpg_trajectory_evaluation": ("uzh-rpg/rpg_trajectory_evaluation", "8c8ceec55c5c5094a6494208cfc5f54afe0bbc4d"),
+}
+
+_KALIBR_EXAMPLE = "kalibr/aslam_cv/aslam_cv_python/example"
+_TUM = "camera-intrinsic-model-rs/data"
+_RPG_RUN = "rpg_trajectory_evaluation/results/euroc_vislam_mono/laptop/vislam_ba/laptop_vislam_ba_V1_02"
+
+#: file name -> sha256
+_SHA256 = {
+    "kalibr/LICENSE": "1181b1c28fecb9348995fa731e50e36bbe6255660f7554831f8a87f65c9d5b09",
+    "kalibr/aslam_cv/aslam_cameras/test/testImageCheckerboard.jpg": (
+        "834b273607d248f4d032d891781a980c3f5ddc1fb5c5c8114753b3338c612611"
+    ),
+    f"{_KALIBR_EXAMPLE}/im_front.jpg": "416302be5ff9d4c46dbd99d4b9d8256599e8d21bea99e934a5f7e6cb642e70cf",
+    f"{_KALIBR_EXAMPLE}/im_left.jpg": "79fbc35d425041060311a2a95787bbd37b6990cd054b5e190774a052f63020cf",
+    f"{_KALIBR_EXAMPLE}/im_rear.jpg": "f77fc3ef3e033c812bcd93662792a194ef4788e7026d67610f2f60ca4f2455db",
+    f"{_KALIBR_EXAMPLE}/im_right.jpg": "95a03d2d9371a6f09072e22ff1001143966a90f49b2d44bd5632d3154e782651",
+    f"{_KALIBR_EXAMPLE}/pipeline.info": "820528eef40575a63e3039f8380b82fbd2e724a69ffb9507af0156995e76bfc9",
+    "camera-intrinsic-model-rs/LICENSE": "c71d239df91726fc519c6eb72d318ec65820627232b2f796219e87dcf35d0ab4",
+    f"{_TUM}/cam0.png": "d36e2a660918b1b5eec678904b43bcd7e39200d207bdf33ab0a630c9901fc14b",
+    f"{_TUM}/cam1.png": "1be738c1c27e2d2388dff154eeb251a6e70dfea74d77cf3a2983a8fd331dcab1",
+    f"{_TUM}/eucm0.json": "ab1bb63f33875baf3bfcb45809ab601fe264f87743c685aed1e6601d0200e40d",
+    f"{_TUM}/eucm1.json": "a2cc310e99537f385867a545cc47395bb3dace7a57d1912bf29bad9b56fa574f",
+    f"{_TUM}/fov_tum_mono.json": "484c2ecd37faed9c074f373d37e4396b10f4e674eeea3ba200635a597c839a89",
+    f"{_TUM}/fov_tum_mono.png": "59b3704363442cc13ced22aa86368d6623d09a76a70980d0806cca76d4aa33e6",
+    f"{_TUM}/tum_vi_with_chart.png": "ec2dec03a1efa960102f36fe2da8a2c4b82d5ba8e8a814fc267b2972fc0bc342",
+    "basalt/LICENSE": "8abbeeb535841bbf306a006b54b5829974156abd98a68f6398558db43a51dd0c",
+    "basalt/data/aprilgrid_6x6.json": "ef4728769502d27e647b2da5e550ce3d2102aaf76209ff14343d80c5029728f9",
+    "basalt/data/euroc_ds_calib.json": "ad8c5a18c48c55dacf61d18ebbc18cd7d4f3acccd5840bd5a5cd8646adb6271c",
+    "basalt/data/euroc_eucm_calib.json": "f1f9b0b63726df8d7b56bb315f21b8beaca5493a7e0de95d0f25a5b500d247cd",
+    "basalt/data/t265_kb4_calib.json": "42c85500728df62a3fc757efa412a7b0a4dfe26c34c8dd23bbe27b0ec9e01330",
+    "basalt/data/tumvi_512_ds_calib.json": "6286c43a43b2cce8f4c3974765106a8da13c357b888d4a5c44f085616e96a04c",
+    "basalt/data/tumvi_512_eucm_calib.json": "740382dcf55dc5b0a411aa3f1cca5c090028d09f83b02569029ca174d4d1f85b",
+    "rpg_trajectory_evaluation/LICENSE": "5fbbb4067a768276cb40e80ceb6664c206f042fa2fe5b77a6754f4fa2fa71638",
+    f"{_RPG_RUN}/eval_cfg.yaml": "54b314ad55b130f861f6b944d7aa8ab8e1a8f39c724a5af9ad8a6a00d4dfe84a",
+    f"{_RPG_RUN}/stamped_ba_estimate0.txt": "18e4016ca37252f025b01a9b79b0626bdd90ead94f66affd992f0faa551464f2",
+    f"{_RPG_RUN}/stamped_groundtruth.txt": "5df27c489c31dba45a493ce95a15dfe48f1ed6b490cdaf0b3ff66f1cdd9d4977",
+}
+
+_TIMEOUT_S = 30
+
+
+class DatasetUnavailable(RuntimeError):
+    """A registered file is neither in the cache folder nor downloadable (no network, wrong hash, no write access)."""
+
+
+def _url(name: str) -> str:
+    """The raw GitHub URL of a registered file at its repository's pinned commit."""
+    folder, _, path = name.partition("/")
+    repository, commit = _REPOSITORIES[folder]
+    return f"https://raw.githubusercontent.com/{repository}/{commit}/{path}"
+
+
+def names() -> list[str]:
+    """Every registered file name, ``"<repo-name>/<path>"``, sorted."""
+    return sorted(_SHA256)
+
+
+def _close_matches(name: str) -> list[str]:
+    """Registered names like ``name``: comparing whole names, else the file names alone."""
+    close = difflib.get_close_matches(name, names(), n=3, cutoff=0.5)
+    if not close:
+        files = difflib.get_close_matches(Path(name).name, [Path(key).name for key in names()], n=3)
+        close = [key for key in names() if Path(key).name in files]
+    return close
+
+
+def cache_dir() -> Path:
+    """The cache folder: ``$GPO_DATA_DIR`` when set, else pooch's per-user cache for ``gpo``."""
+    return Path(os.environ.get("GPO_DATA_DIR") or pooch.os_cache("gpo")).expanduser()
+
+
+def fetch(name: str) -> Path:
+    """The local path of the registered file ``name``, downloaded (and sha256-checked) on first use.
+
+    Raises KeyError for a name not in the registry (naming the closest ones), and `DatasetUnavailable`
+    when the file is not in the cache folder and cannot be downloaded.
+    """
+    if name not in _SHA256:
+        close = _close_matches(name)
+        hint = f"did you mean {', '.join(map(repr, close))}?" if close else "see gpo.datasets.names()"
+        raise KeyError(f"{name!r} is not a gpo dataset file; {hint}")
+    folder = cache_dir()
+    store = pooch.Pooch(
+        path=folder,
+        base_url="",
+        registry={key: f"sha256:{value}" for key, value in _SHA256.items()},
+        urls={key: _url(key) for key in _SHA256},
+    )
+    downloader = pooch.HTTPDownloader(timeout=_TIMEOUT_S, progressbar=importlib.util.find_spec("tqdm") is not None)
+    try:
+        return Path(store.fetch(name, downloader=downloader))
+    except (OSError, ValueError) as error:  # requests' errors are OSErrors; pooch's hash mismatch is a ValueError
+        raise DatasetUnavailable(
+            f"{name}: no valid copy in the cache folder {folder}, and the download from {_url(name)} failed ({error}). "
+            "Set GPO_DATA_DIR to a folder holding a copy as <repo-name>/<path> (e.g. ../shared/real_data), "
+            "or connect to the internet and try again."
+        ) from error
+
+
+def tumvi_eucm_calibration() -> Path:
+    """Basalt's published EUCM calibration of the TUM VI 512x512 stereo rig (JSON; cam0 and cam1).
+
+    From VladyslavUsenko/basalt (BSD-3-Clause); read it with `gpo.calibfiles.load_basalt`.
+    """
+    return fetch("basalt/data/tumvi_512_eucm_calib.json")
+
+
+def tumvi_chart_image() -> np.ndarray:
+    """A 512x512 TUM VI fisheye frame showing a calibration chart, as a uint8 grey image.
+
+    The PNG holds 16-bit values (up to 65520); the 8-bit image is ``value // 256``, i.e. the top 8 bits,
+    without any contrast stretch. Which TUM VI camera took it is not verified (probably cam0, see
+    `tumvi_eucm_calibration`). From powei-lin/camera-intrinsic-model-rs (Apache-2.0); the frame is from the
+    TUM VI dataset, which TUM lists under CC BY 4.0: check this before redistributing, and cite the TUM paper.
+    """
+    image = cv2.imread(str(fetch(f"{_TUM}/tum_vi_with_chart.png")), cv2.IMREAD_UNCHANGED)
+    return (image >> 8).astype(np.uint8)
+
+
+def kalibr_car_images() -> dict[str, np.ndarray]:
+    """The four 1280x800 uint8 grey surround-view fisheye images of Kalibr's car example, by camera.
+
+    Keys ``front``, ``left``, ``rear``, ``right``: low-mounted fisheye cameras of the V-Charge car "grobi"
+    (ETH ASL, May 2013) looking at asphalt with lane markings. Their intrinsics and camera-to-vehicle
+    extrinsics are in `kalibr_car_pipeline_info`. From ethz-asl/kalibr (BSD-3-Clause).
+    """
+    return {
+        camera: cv2.imread(str(fetch(f"{_KALIBR_EXAMPLE}/im_{camera}.jpg")), cv2.IMREAD_GRAYSCALE)
+        for camera in ("front", "left", "rear", "right")
+    }
+
+
+def kalibr_car_pipeline_info() -> Path:
+    """The path of Kalibr's ``pipeline.info`` for the car images (boost property-tree INFO format).
+
+    Per camera: Mei/unified "omni" intrinsics (xi, fu, fv, cu, cv) with radtan distortion, and ``T_v_c``
+    extrinsics whose quaternions follow the JPL convention (R_vc = R_hamilton(q)^T; read literally as
+    Hamilton they give nonsense axes). From ethz-asl/kalibr (BSD-3-Clause).
+    """
+    return fetch(f"{_KALIBR_EXAMPLE}/pipeline.info")
+
+
+def floor_checkerboard_image() -> np.ndarray:
+    """A 1280x960 uint8 grey fisheye-like image looking down at a checkerboard lying on the floor.
+
+    9x10 squares, so 8x9 inner corners; Kalibr's test assumes 0.05 m spacing, the real square size is not
+    verified, and no intrinsics are published for it. From ethz-asl/kalibr (BSD-3-Clause).
+    """
+    return cv2.imread(str(fetch("kalibr/aslam_cv/aslam_cameras/test/testImageCheckerboard.jpg")), cv2.IMREAD_GRAYSCALE)
+
+
+def rpg_trajectories() -> dict[str, Path]:
+    """Paths of one EuRoC V1_02 run from rpg_trajectory_evaluation (MIT): ``estimate``, ``groundtruth``, ``eval_cfg``.
+
+    The estimate is a VI-SLAM (BA) result and the ground truth is EuRoC's, both TUM-format text files
+    (``# timestamp tx ty tz qx qy qz qw``); ``eval_cfg.yaml`` asks for ``posyaw`` alignment over all frames.
+    """
+    return {
+        "estimate": fetch(f"{_RPG_RUN}/stamped_ba_estimate0.txt"),
+        "groundtruth": fetch(f"{_RPG_RUN}/stamped_groundtruth.txt"),
+        "eval_cfg": fetch(f"{_RPG_RUN}/eval_cfg.yaml"),
+    }

@@ -1,0 +1,187 @@
+"""Floor textures for the simulator, built from photographs that ship inside scikit-image.
+
+A floor is a large grey image lying on the world plane z = 0: texel (row i, column j) has its
+centre at world ``(x0 + j * texel, y0 + i * texel)`` metres. The texture is not periodic:
+randomly rotated, flipped and scaled crops of the photographs ``gravel`` and ``grass`` are
+blended with feathered, variance-preserving weights ("texture bombing"), then
+shaped into one of three floor kinds that mirror the second paper's test floors:
+
+- ``"wood"`` — high texture: planks with streaked grain, knots of tone, dark seams;
+- ``"raised"`` — average texture: 0.6 m raised-floor tiles with a speckled surface and seams;
+- ``"industrial"`` — low texture: smooth screed with sparse faint scratches; the renderer adds
+  a view-dependent reflective sheen for this kind.
+
+Low-frequency stains and world-fixed lighting go on top of every kind. A mip-map pyramid of
+the texture lets the renderer anti-alias (see ``gpo.sim.render``). Everything is seeded.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+import skimage.data
+
+FLOOR_KINDS = ("wood", "raised", "industrial")
+
+
+@dataclass(frozen=True, eq=False)
+class FloorTexture:
+    """A mip-mapped floor image on the world plane z = 0.
+
+    ``levels[k]`` is the texture at ``texel * 2**k`` metres per texel (uint8); ``origin`` is the
+    world (x, y) in metres of the centre of texel (0, 0) of level 0; rows run along +y, columns
+    along +x. ``sheen`` tells the renderer to add a reflective highlight.
+    """
+
+    levels: tuple[np.ndarray, ...]
+    origin: tuple[float, float]
+    texel: float
+    kind: str
+    sheen: bool
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(x_min, x_max, y_min, y_max) in metres covered by the texture."""
+        height, width = self.levels[0].shape
+        x0, y0 = self.origin
+        half = 0.5 * self.texel
+        return x0 - half, x0 + (width - 0.5) * self.texel, y0 - half, y0 + (height - 0.5) * self.texel
+
+
+def make_floor(
+    kind: str, extent: tuple[float, float, float, float], texel: float = 1e-3, seed: int = 0
+) -> FloorTexture:
+    """A floor of ``kind`` covering ``extent`` = (x_min, x_max, y_min, y_max) metres at ``texel`` metres per texel."""
+    if kind not in FLOOR_KINDS:
+        raise ValueError(f"unknown floor kind {kind!r}; the kinds are {', '.join(FLOOR_KINDS)}")
+    x_min, x_max, y_min, y_max = extent
+    if not (x_max > x_min and y_max > y_min and texel > 0):
+        raise ValueError(f"a floor needs x_max > x_min, y_max > y_min and texel > 0, got {extent} and {texel}")
+    shape = (int(np.ceil((y_max - y_min) / texel)), int(np.ceil((x_max - x_min) / texel)))
+    rng = np.random.default_rng(seed)
+    grain = _bombed_grain(shape, rng)
+    surface = {"wood": _wood, "raised": _raised_floor, "industrial": _industrial}[kind](grain, texel, rng)
+    surface *= _low_frequency(shape, texel, cell_m=0.35, rng=rng, amplitude=0.08)  # stains
+    surface *= _low_frequency(shape, texel, cell_m=2.0, rng=rng, amplitude=0.12)  # lighting
+    image = np.clip(surface, 0, 255).astype(np.uint8)
+    return FloorTexture(
+        _mip_pyramid(image), (x_min + 0.5 * texel, y_min + 0.5 * texel), texel, kind, kind == "industrial"
+    )
+
+
+def _photo_variants(rng: np.random.Generator, count: int = 24, size: int = 256) -> list[np.ndarray]:
+    """Zero-mean, unit-variance square crops of the photographs, randomly rotated, flipped and scaled."""
+    photos = [getattr(skimage.data, name)().astype(np.float32) for name in ("gravel", "grass")]
+    variants = []
+    for _ in range(count):
+        photo = photos[rng.integers(len(photos))]
+        centre = (photo.shape[1] / 2.0, photo.shape[0] / 2.0)
+        rotation = cv2.getRotationMatrix2D(centre, rng.uniform(0.0, 360.0), rng.uniform(0.8, 1.25))
+        rotated = cv2.warpAffine(
+            photo, rotation, photo.shape[::-1], flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT
+        )
+        top = (photo.shape[0] - size) // 2
+        crop = rotated[top : top + size, top : top + size]
+        if rng.random() < 0.5:
+            crop = crop[:, ::-1]
+        crop = crop - cv2.GaussianBlur(crop, (0, 0), 24.0)  # keep the grain, drop the photo's lighting
+        variants.append((crop - crop.mean()) / crop.std())
+    return variants
+
+
+def _bombed_grain(shape: tuple[int, int], rng: np.random.Generator, spacing: int = 96) -> np.ndarray:
+    """Non-periodic zero-mean, unit-variance grain: feathered photo crops at jittered grid points.
+
+    The sum of crops weighted by windows w_i is divided by sqrt(sum w_i^2), which keeps the
+    variance constant where crops overlap (a plain weighted mean would fade the contrast there).
+    """
+    variants = _photo_variants(rng)
+    size = variants[0].shape[0]
+    ramp = np.sin(np.linspace(0.0, np.pi, size, dtype=np.float32)) ** 2
+    window = np.outer(ramp, ramp)
+    height, width = shape
+    weighted = np.zeros((height + 2 * size + spacing, width + 2 * size + spacing), np.float32)
+    weights = np.zeros_like(weighted)
+    for top in range(0, height + size, spacing):
+        for left in range(0, width + size, spacing):
+            i, j = top + rng.integers(spacing), left + rng.integers(spacing)
+            weighted[i : i + size, j : j + size] += window * variants[rng.integers(len(variants))]
+            weights[i : i + size, j : j + size] += window * window
+    region = (slice(size, size + height), slice(size, size + width))
+    return weighted[region] / np.sqrt(np.maximum(weights[region], 1e-6))
+
+
+def _low_frequency(
+    shape: tuple[int, int], texel: float, cell_m: float, rng: np.random.Generator, amplitude: float
+) -> np.ndarray:
+    """A smooth random field around 1 (1 +- amplitude), varying over about ``cell_m`` metres."""
+    cells = (int(np.ceil(shape[0] * texel / cell_m)) + 2, int(np.ceil(shape[1] * texel / cell_m)) + 2)
+    coarse = rng.normal(0.0, 1.0, cells).astype(np.float32)
+    field = cv2.resize(coarse, shape[::-1], interpolation=cv2.INTER_CUBIC)
+    return 1.0 + amplitude * np.tanh(field)
+
+
+def _wood(grain: np.ndarray, texel: float, rng: np.random.Generator) -> np.ndarray:
+    """Planks along x, 0.12-0.18 m wide, staggered ends, streaked grain and per-plank tone."""
+    height, width = grain.shape
+    streaks = cv2.GaussianBlur(grain, (0, 0), sigmaX=12.0, sigmaY=0.8)
+    streaks /= streaks.std()
+    rows = np.arange(height) * texel
+    cols = np.arange(width) * texel
+    surface = np.empty_like(grain)
+    edge = 0.0
+    while edge < rows[-1] + texel:
+        plank_width = rng.uniform(0.12, 0.18)
+        in_plank = slice(int(edge / texel), int((edge + plank_width) / texel))
+        board_length = rng.uniform(0.9, 1.6)
+        ends = np.arange(-rng.uniform(0, board_length), cols[-1] + board_length, board_length)
+        board = np.searchsorted(ends, cols)
+        tone = rng.normal(135.0, 18.0, len(ends) + 1)[board]
+        surface[in_plank] = tone + 30.0 * streaks[in_plank] + 10.0 * grain[in_plank]
+        seam_rows = slice(in_plank.start, in_plank.start + max(1, int(0.002 / texel)))
+        surface[seam_rows] = 45.0
+        seam_cols = np.abs(cols[None, :] - ends[np.clip(board, 0, len(ends) - 1)][None, :]) < 0.0015
+        surface[in_plank] = np.where(seam_cols, 50.0, surface[in_plank])
+        edge += plank_width
+    return surface
+
+
+def _raised_floor(grain: np.ndarray, texel: float, rng: np.random.Generator) -> np.ndarray:
+    """0.6 m square tiles, each with its own tone, a speckled surface and 3 mm dark seams."""
+    height, width = grain.shape
+    tile = 0.6
+    rows = (np.arange(height) * texel) // tile
+    cols = (np.arange(width) * texel) // tile
+    tones = rng.normal(150.0, 6.0, (int(rows[-1]) + 1, int(cols[-1]) + 1))
+    surface = tones[rows.astype(int)[:, None], cols.astype(int)[None, :]] + 16.0 * grain
+    seam = 0.003
+    on_row_seam = ((np.arange(height) * texel) % tile) < seam
+    on_col_seam = ((np.arange(width) * texel) % tile) < seam
+    surface[on_row_seam] = 70.0
+    surface[:, on_col_seam] = 70.0
+    return surface.astype(np.float32)
+
+
+def _industrial(grain: np.ndarray, texel: float, rng: np.random.Generator) -> np.ndarray:
+    """Smooth screed: faint blurred grain and sparse thin scratches of a few grey levels."""
+    height, width = grain.shape
+    surface = 160.0 + 4.0 * cv2.GaussianBlur(grain, (0, 0), 3.0) / 0.5
+    scratches = np.zeros((height, width), np.float32)
+    area_m2 = height * width * texel * texel
+    for _ in range(int(rng.poisson(2.5 * area_m2))):
+        start = rng.uniform([0, 0], [width, height])
+        length = rng.uniform(0.03, 0.3) / texel
+        angle = rng.uniform(0, np.pi)
+        end = start + length * np.array([np.cos(angle), np.sin(angle)])
+        cv2.line(scratches, tuple(int(v) for v in start), tuple(int(v) for v in end), float(rng.uniform(-12, 12)), 1)
+    return surface + cv2.GaussianBlur(scratches, (0, 0), 0.7)
+
+
+def _mip_pyramid(image: np.ndarray, smallest: int = 8) -> tuple[np.ndarray, ...]:
+    """Level k halves level k-1 (``cv2.pyrDown``) until a side would drop below ``smallest`` texels."""
+    levels = [image]
+    while min(levels[-1].shape) // 2 >= smallest:
+        levels.append(cv2.pyrDown(levels[-1]))
+    return tuple(levels)

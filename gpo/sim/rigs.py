@@ -1,0 +1,103 @@
+"""The two camera rigs of the simulator: where each camera sits on its robot and what it is.
+
+Frames (REP-103/105): ``base_link`` at the rear-axle centre on the floor, x forward, y left,
+z up; the camera optical frame x right, y down, z forward. A ``CameraMount`` is the pose of the
+optical frame in ``base_link``. The tracking camera's body frame (x forward, y left, z up, as the
+T265 reports its pose) is the optical frame turned by ``OPTICAL_IN_BODY``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from gpo.camera import EUCM, T265_LIKE, Pinhole
+
+# columns: the optical x (right), y (down), z (forward) axes written in a forward-looking body frame
+OPTICAL_IN_BODY = Rotation.from_matrix([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+
+
+@dataclass(frozen=True, eq=False)
+class CameraMount:
+    """Pose of the camera optical frame in ``base_link``: ``position`` (3,) metres, ``rotation`` base <- optical."""
+
+    position: np.ndarray
+    rotation: Rotation
+
+    @classmethod
+    def forward(cls, x: float, y: float, height: float, pitch: float = 0.0, roll: float = 0.0) -> CameraMount:
+        """A forward-looking camera ``height`` metres above the floor at (x, y) in ``base_link``.
+
+        ``pitch`` (radians, about the camera's left axis, positive looks down) and ``roll``
+        (radians, about its forward axis, positive lifts its left side) tilt it away from level.
+        """
+        body = Rotation.from_euler("YX", [pitch, roll])
+        return cls(np.array([x, y, height], dtype=float), body * OPTICAL_IN_BODY)
+
+    @classmethod
+    def downward(cls, x: float, y: float, height: float, tilt_x: float = 0.0, tilt_y: float = 0.0) -> CameraMount:
+        """A camera looking straight down from ``height`` metres, image top towards the robot's front.
+
+        ``tilt_x`` and ``tilt_y`` (radians) turn it about base_link's x and y axes.
+        """
+        # optical x = -y_base (image right = robot right), y = -x_base (image down = backwards), z = -z_base
+        down = Rotation.from_matrix([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+        return cls(np.array([x, y, height], dtype=float), Rotation.from_euler("xy", [tilt_x, tilt_y]) * down)
+
+    @property
+    def height(self) -> float:
+        """Height of the optical centre above the floor, metres."""
+        return float(self.position[2])
+
+    @property
+    def body_rotation(self) -> Rotation:
+        """base <- camera body frame (x forward, y left, z up), as a tracking camera reports its pose."""
+        return self.rotation * OPTICAL_IN_BODY.inv()
+
+
+@dataclass(frozen=True, eq=False)
+class Rig:
+    """A camera on a robot: the model, the mount, the frame rate and the names it is recorded under."""
+
+    name: str
+    camera: EUCM | Pinhole
+    mount: CameraMount
+    rate_hz: float
+    image_topic: str
+    info_topic: str
+    frame_id: str
+
+
+def t265_rig() -> Rig:
+    """The first paper's rig: a T265-like fisheye at the front of a low pallet robot.
+
+    0.60 m ahead of the rear axle, 0.12 m above the floor, pitched 6 degrees down and rolled
+    1.5 degrees, so that the floor image needs rectification. 30 frames per second.
+    """
+    mount = CameraMount.forward(x=0.60, y=0.0, height=0.12, pitch=np.radians(6.0), roll=np.radians(1.5))
+    return Rig(
+        "t265",
+        T265_LIKE,
+        mount,
+        30.0,
+        "/camera/fisheye1/image_raw",
+        "/camera/fisheye1/camera_info",
+        "camera_fisheye1_optical_frame",
+    )
+
+
+def downward_rig() -> Rig:
+    """The second paper's rig: a 752 x 480 pinhole camera looking down from 0.25 m, tilted about 1 degree.
+
+    f = 600 px with mild radial-tangential distortion, at the robot's centre, 35 frames per second.
+    """
+    camera = Pinhole(
+        fx=600.0, fy=600.0, cx=371.5, cy=242.0, dist=(-0.12, 0.05, 4e-4, -3e-4, 0.0), width=752, height=480
+    )
+    mount = CameraMount.downward(x=0.0, y=0.0, height=0.25, tilt_x=np.radians(0.8), tilt_y=np.radians(-0.6))
+    return Rig("downward", camera, mount, 35.0, "/camera/image_raw", "/camera/camera_info", "camera_optical_frame")
+
+
+RIGS = {"t265": t265_rig, "downward": downward_rig}
