@@ -19,6 +19,7 @@ $(STAMP): environment.txt pyproject.toml
 
 test: $(STAMP)
 	$(BIN)/ruff check .
+	$(BIN)/python -m gpo recording sample
 	$(BIN)/python -m pytest -p no:cacheprovider
 
 demo: $(STAMP)

@@ -11,8 +11,10 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from gpo.bag import describe
 from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.plots import draw_projection_curves, draw_room_in_image, field_of_view_text
+from gpo.sim.record import PRESETS, recording, simulate, write_sample_data
 
 
 def demo(out: Path) -> list[Path]:
@@ -52,13 +54,37 @@ def main(argv: list[str] | None = None) -> int:
     commands = parser.add_subparsers(dest="command", required=True)
     demo_parser = commands.add_parser("demo", help="write the suite's figures and tables into a folder")
     demo_parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default: out)")
+    simulate_parser = commands.add_parser("simulate", help="render a simulated recording into a ROS bag")
+    simulate_parser.add_argument("--preset", required=True, choices=sorted(PRESETS), help="what to record")
+    simulate_parser.add_argument("--out", type=Path, required=True, help="the new bag (ros1: a .bag file)")
+    simulate_parser.add_argument("--format", default="ros1", choices=("ros1", "ros2", "ros2-mcap"))
+    info_parser = commands.add_parser("info", help="describe a ROS1 or ROS2 bag")
+    info_parser.add_argument("bag", type=Path)
+    sample_parser = commands.add_parser("sample-data", help="regenerate the small sample files kept in data/")
+    sample_parser.add_argument("--out", type=Path, default=Path("data"), help="output folder (default: data)")
+    recording_parser = commands.add_parser("recording", help="print the cached bag of a preset, making it if needed")
+    recording_parser.add_argument("name", nargs="?", default="sample", choices=sorted(PRESETS))
     args = parser.parse_args(argv)
 
-    if args.command == "demo":
-        written = demo(args.out)
-        print(f"wrote {len(written)} files to {args.out.resolve()}:")
-        for path in written:
-            print(f"  {path}")
+    try:
+        if args.command == "demo":
+            written = demo(args.out)
+            print(f"wrote {len(written)} files to {args.out.resolve()}:")
+            for path in written:
+                print(f"  {path}")
+        elif args.command == "simulate":
+            print(f"{args.preset}: {PRESETS[args.preset].description}")
+            print(f"wrote {simulate(args.preset, args.out, args.format)}")
+        elif args.command == "info":
+            print(describe(args.bag))
+        elif args.command == "recording":
+            print(recording(args.name))
+        elif args.command == "sample-data":
+            for path in write_sample_data(args.out):
+                print(f"wrote {path}")
+    except (ValueError, FileNotFoundError, FileExistsError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
     return 0
 
 

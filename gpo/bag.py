@@ -63,7 +63,6 @@ import numpy as np
 from rosbags import rosbag1, rosbag2
 from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
-from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from tqdm.auto import tqdm
 
@@ -101,10 +100,10 @@ _TO_GRAY = {
     "rgba8": cv2.COLOR_RGBA2GRAY,
     "bgra8": cv2.COLOR_BGRA2GRAY,
 }
-_TO_BGR = {"rgb8": cv2.COLOR_RGB2BGR, "rgba8": cv2.COLOR_RGBA2BGRA}
+_TO_BGR = {"rgb8": (cv2.COLOR_RGB2BGR, "bgr8"), "rgba8": (cv2.COLOR_RGBA2BGRA, "bgra8")}
 _FROM_BGR = {("bgr8", "rgb8"): cv2.COLOR_BGR2RGB, ("bgra8", "rgba8"): cv2.COLOR_BGRA2RGBA}
 
-_ROSBAGS_ERRORS = (AnyReaderError, rosbag1.ReaderError, rosbag2.ReaderError, SerdeError)
+_ROSBAGS_ERRORS = (AnyReaderError, rosbag1.ReaderError, rosbag2.ReaderError)
 _WRITER_STORAGE = {
     "ros2": rosbag2.StoragePlugin.SQLITE3,
     "ros2-sqlite3": rosbag2.StoragePlugin.SQLITE3,
@@ -178,6 +177,7 @@ class Recording:
             raise ValueError(f"{self.path} holds no messages: expected a recording with at least one")
 
     def close(self) -> None:
+        """Close the recording's files."""
         self._reader.close()
 
     def __enter__(self) -> Recording:
@@ -240,11 +240,14 @@ class Recording:
         ``start_ns`` (inclusive) and ``end_ns`` (exclusive) select by header stamp; the whole topic
         is read, and messages outside are skipped before decoding. ``gray=True`` converts colour
         to mono8 (mono8 and mono16 stay as they are). Header stamps that go backwards or repeat
-        raise a ``StampWarning`` (the first of each kind); the frames are still yielded in bag
+        issue a ``StampWarning`` (the first of each kind); the frames are still yielded in bag
         order, untouched. A tqdm bar counts the topic's messages unless ``progress`` is False.
+        The topic is checked at the call, each message's encoding when it is read.
         """
         topic = self.image_topic(topic)
-        connections = self._connections(topic, IMAGE_TYPES)
+        return self._frames(topic, self._connections(topic, IMAGE_TYPES), start_ns, end_ns, gray, progress)
+
+    def _frames(self, topic, connections, start_ns, end_ns, gray, progress) -> Iterator[Frame]:
         total = sum(c.msgcount for c in connections)
         messages = tqdm(self._messages(connections), total=total, desc=topic, unit="msg", disable=not progress)
         context = f"{self.path}, topic {topic}"
@@ -474,16 +477,21 @@ class BagWriter:
         ``format``: ``png`` (lossless; every encoding) or ``jpeg`` (lossy, ``jpeg_quality`` 0-100;
         mono8, rgb8, bgr8). ``encoding`` as for ``add_image``.
         """
+        context = f"{self.path}, topic {topic}"
         if format not in CODECS:
-            raise ValueError(f"{topic}: compressed image format {format!r} unknown; expected one of {CODECS}")
+            raise ValueError(f"{context}: compressed image format {format!r} unknown; expected one of {CODECS}")
         image = np.asarray(image)
-        encoding = _check_encoding(image, encoding, f"{self.path}, topic {topic}")
+        encoding = _check_encoding(image, encoding, context)
         if format == "jpeg" and encoding not in ("mono8", "rgb8", "bgr8"):
-            raise ValueError(f"{topic}: jpeg holds mono8, rgb8 or bgr8 images, not {encoding}")
-        coded = cv2.cvtColor(image, _TO_BGR[encoding]) if encoding in _TO_BGR else image
-        coded_encoding = {"rgb8": "bgr8", "rgba8": "bgra8"}.get(encoding, encoding)
+            raise ValueError(f"{context}: jpeg holds mono8, rgb8 or bgr8 images, not {encoding}")
+        coded, coded_encoding = image, encoding
+        if encoding in _TO_BGR:
+            conversion, coded_encoding = _TO_BGR[encoding]
+            coded = cv2.cvtColor(image, conversion)
         parameters = [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality] if format == "jpeg" else []
-        _, data = cv2.imencode(f".{format}", coded, parameters)
+        encoded, data = cv2.imencode(f".{format}", coded, parameters)
+        if not encoded:
+            raise ValueError(f"{context}: OpenCV could not encode a {encoding} image as {format}")
         message = self._types[COMPRESSED_IMAGE](
             header=self._header(topic, stamp_ns, frame_id),
             format=f"{encoding}; {format} compressed {coded_encoding}",
@@ -650,15 +658,19 @@ def copy_with_trajectory(source_bag, destination, trajectory: Trajectory, topic:
 
 
 def _copy_messages(source: Recording, writer: BagWriter) -> None:
-    """Every message of ``source`` into ``writer``, each connection recreated as it was."""
-    copies = {}
-    for connection in source._reader.connections:
-        options = connection.ext._asdict()
-        copies[connection.id, id(connection.owner)] = writer._writer.add_connection(
-            connection.topic, connection.msgtype, typestore=source._reader.typestore, **options
+    """Every message of ``source`` into ``writer``, each connection recreated as it was.
+
+    A connection's ``ext`` holds the writer's options of its format: callerid and latching in ROS1,
+    serialization format and offered QoS in ROS2.
+    """
+    copies = {
+        connection.id: writer._writer.add_connection(
+            connection.topic, connection.msgtype, typestore=source._reader.typestore, **connection.ext._asdict()
         )
+        for connection in source._reader.connections
+    }
     for connection, log_time, raw in source._raw_messages():
-        writer._writer.write(copies[connection.id, id(connection.owner)], log_time, raw)
+        writer._writer.write(copies[connection.id], log_time, raw)
 
 
 def _locate(path: Path) -> tuple[str, Path]:

@@ -253,9 +253,24 @@ def test_frames_stream_one_message_at_a_time(tmp_path):
         assert next(frames).stamp_ns == T0 + PERIOD
 
 
-def test_messages_may_be_added_in_any_time_order(tmp_path):
-    path = bag_path(tmp_path, "ros2-mcap")
-    with BagWriter(path, "ros2-mcap") as writer:
+def test_progress_bar_counts_the_topic_messages(tmp_path, capsys):
+    path = bag_path(tmp_path, "ros1")
+    with BagWriter(path) as writer:
+        for i in range(3):
+            writer.add_image("/camera", T0 + i * PERIOD, np.zeros((2, 2), np.uint8), CAMERA_FRAME)
+    with Recording(path) as recording:
+        assert len(list(recording.frames())) == 3
+        progress = capsys.readouterr().err
+        assert "/camera" in progress
+        assert "3/3" in progress
+        assert len(list(recording.frames(progress=False))) == 3
+        assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("bag_format", FORMATS)
+def test_messages_may_be_added_in_any_time_order(tmp_path, bag_format):
+    path = bag_path(tmp_path, bag_format)
+    with BagWriter(path, bag_format) as writer:
         for stamp, value in ((T0 + 3, 3), (T0 + 1, 1), (T0 + 2, 2)):
             writer.add_image("/camera", stamp, np.full((2, 2), value, np.uint8), CAMERA_FRAME)
         writer.add_odometry("/odom", T0, [0, 0, 0], [0, 0, 0, 1], "odom", "base_link")
@@ -460,7 +475,7 @@ def test_a_misspelled_topic_names_the_close_match_and_every_topic(tmp_path):
     path = tmp_path / "one.bag"
     write_topics(path, ["/camera/fisheye1/image_raw"])
     with Recording(path) as recording, pytest.raises(ValueError) as error:
-        next(recording.frames("/camera/fisheye1/image_rwa"))
+        recording.frames("/camera/fisheye1/image_rwa")  # checked at the call, before any reading
     message = str(error.value)
     assert str(path) in message
     assert "/camera/fisheye1/image_rwa" in message
@@ -476,7 +491,7 @@ def test_a_topic_of_the_wrong_type_names_the_types_expected(tmp_path):
         with pytest.raises(ValueError, match="carries sensor_msgs/msg/Image; expected one of: nav_msgs/msg/Odometry"):
             recording.trajectory("/camera/image_raw")
         with pytest.raises(ValueError, match="expected one of: sensor_msgs/msg/Image"):
-            next(recording.frames("/odom"))
+            recording.frames("/odom")
 
 
 def test_no_image_topic(tmp_path):

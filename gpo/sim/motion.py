@@ -66,6 +66,7 @@ import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import get_args
 
 import numpy as np
 from scipy.optimize import brentq
@@ -108,15 +109,6 @@ def _non_negative(name: str, value) -> float:
     if value < 0:
         raise ValueError(f"{name} must be >= 0, got {value}")
     return value
-
-
-def _smooth_step(u):
-    """Cycloidal step h(u) = u - sin(2πu) / (2π) and its derivatives h' = 1 - cos 2πu, h'' = 2π sin 2πu.
-
-    h(0) = 0, h(1) = 1, and h', h'' vanish at both ends.
-    """
-    angle = 2 * np.pi * u
-    return u - np.sin(angle) / (2 * np.pi), 1 - np.cos(angle), 2 * np.pi * np.sin(angle)
 
 
 # ---------------------------------------------------------------------------------------------- limits
@@ -248,9 +240,14 @@ def _speed_profile(v_in: float, cruise: float, v_out: float, length: float, acce
 class _PathSegment:
     """Driving along a curve: signed arc length s from the start (s < 0 in reverse), curvature κ(s).
 
-    Subclasses give ``signed_length_m``, ``cruise_mps`` (> 0), ``local_pose(s)`` -> (x, y, θ) relative to
-    the start pose and ``curvature(s)`` -> (κ, dκ/ds).
+    Subclasses have a field ``speed_mps`` and give ``signed_length_m``, ``local_pose(s)`` -> (x, y, θ)
+    relative to the start pose and ``curvature(s)`` -> (κ, dκ/ds).
     """
+
+    @property
+    def cruise_mps(self) -> float:
+        """The highest speed along the segment, m/s (> 0)."""
+        return abs(float(self.speed_mps))
 
     @property
     def path_length_m(self) -> float:
@@ -290,10 +287,6 @@ class Straight(_PathSegment):
     def signed_length_m(self) -> float:
         return float(self.distance_m)
 
-    @property
-    def cruise_mps(self) -> float:
-        return float(self.speed_mps)
-
     def local_pose(self, s):
         zero = np.zeros_like(s)
         return s, zero, zero
@@ -327,10 +320,6 @@ class Arc(_PathSegment):
         return math.copysign(self.radius_m * abs(self.angle_rad), self.speed_mps)
 
     @property
-    def cruise_mps(self) -> float:
-        return abs(float(self.speed_mps))
-
-    @property
     def kappa(self) -> float:
         """Signed curvature dθ/ds, 1/m."""
         return self.angle_rad / self.signed_length_m
@@ -348,8 +337,13 @@ class _SmoothTurn(_PathSegment):
     """A curve given by its heading θ(u) over the fraction u = s / S of its signed length S.
 
     κ = θ_u / S, dκ/ds = θ_uu / S²; the position is x(s) = ∫0^s cos θ, y(s) = ∫0^s sin θ, by
-    Gauss-Legendre quadrature. Subclasses give ``heading(u)`` -> (θ, θ_u, θ_uu).
+    Gauss-Legendre quadrature. Subclasses have fields ``length_m`` (> 0) and ``speed_mps`` (< 0: reverse)
+    and give ``heading(u)`` -> (θ, θ_u, θ_uu).
     """
+
+    @property
+    def signed_length_m(self) -> float:
+        return math.copysign(self.length_m, self.speed_mps)
 
     def local_pose(self, s):
         length = self.signed_length_m
@@ -363,6 +357,15 @@ class _SmoothTurn(_PathSegment):
         length = self.signed_length_m
         _, theta_u, theta_uu = self.heading(np.asarray(s) / length)
         return theta_u / length, theta_uu / length**2
+
+
+def _smooth_step(u):
+    """Cycloidal step h(u) = u - sin(2πu) / (2π) and its derivatives h' = 1 - cos 2πu, h'' = 2π sin 2πu.
+
+    h(0) = 0, h(1) = 1, and h', h'' vanish at both ends.
+    """
+    angle = 2 * np.pi * u
+    return u - np.sin(angle) / (2 * np.pi), 1 - np.cos(angle), 2 * np.pi * np.sin(angle)
 
 
 @dataclass(frozen=True)
@@ -382,14 +385,6 @@ class Bend(_SmoothTurn):
         _nonzero("Bend.angle_rad", self.angle_rad)
         _positive("Bend.length_m", self.length_m)
         _nonzero("Bend.speed_mps", self.speed_mps)
-
-    @property
-    def signed_length_m(self) -> float:
-        return math.copysign(self.length_m, self.speed_mps)
-
-    @property
-    def cruise_mps(self) -> float:
-        return abs(float(self.speed_mps))
 
     def heading(self, u):
         h, dh, ddh = _smooth_step(u)
@@ -417,7 +412,7 @@ class SCurve(_SmoothTurn):
     Drives at up to |``speed_mps``| (< 0: in reverse, still ending ``offset_m`` to the left). The heading is
     θ(u) = ψ sin⁴(πu): it swings to ψ and back, the curvature is zero with zero slope at both ends, so it
     joins straights without stopping. ψ (``peak_heading_rad``) is solved from the offset; at most π/2,
-    which allows an offset of about 0.57 ``length_m``.
+    which allows an offset of up to 0.457 ``length_m``.
     """
 
     length_m: float
@@ -438,14 +433,6 @@ class SCurve(_SmoothTurn):
             )
         peak = brentq(lambda psi: _scurve_offset_ratio(psi) - abs(ratio), 0.0, _SCURVE_MAX_PEAK_HEADING, xtol=1e-14)
         object.__setattr__(self, "peak_heading_rad", math.copysign(peak, ratio))
-
-    @property
-    def signed_length_m(self) -> float:
-        return math.copysign(self.length_m, self.speed_mps)
-
-    @property
-    def cruise_mps(self) -> float:
-        return abs(float(self.speed_mps))
 
     def heading(self, u):
         return tuple(self.peak_heading_rad * part for part in _scurve_heading_shape(u))
@@ -492,7 +479,6 @@ class Stop:
 
 
 Segment = Straight | Arc | Bend | SCurve | Spin | Stop
-SEGMENT_TYPES = (Straight, Arc, Bend, SCurve, Spin, Stop)
 
 
 def _handover_limit(before: Segment, after: Segment) -> float:
@@ -584,8 +570,8 @@ class MotionPlan:
         if not self.segments:
             raise ValueError("a motion plan needs at least one segment")
         for number, segment in enumerate(self.segments):
-            if not isinstance(segment, SEGMENT_TYPES):
-                names = ", ".join(kind.__name__ for kind in SEGMENT_TYPES)
+            if not isinstance(segment, Segment):
+                names = ", ".join(kind.__name__ for kind in get_args(Segment))
                 raise TypeError(f"segment {number} is a {type(segment).__name__}; expected one of {names}")
         if len(start) != 3:
             raise ValueError(f"start must be (x, y, yaw), got {len(start)} numbers")
@@ -680,8 +666,8 @@ class TrackingDrift:
     ``position_walk_m_per_sqrt_s`` q_p (m/√s, each axis); ``jitter_m`` (m, each axis) and ``jitter_rad``
     (rad, about u) of white noise.
 
-    The defaults give 0.1-0.2 m of final error on 12-17 m paths at 0.3-0.5 m/s, as the first paper
-    measured for its T265 (0.166 m on average).
+    The defaults give 0.10-0.23 m of final error on the 14-16 m paths ``long1``-``long3`` at up to 0.5 m/s
+    (0.15 m on average over 20 seeds), as the first paper measured for its T265 (0.166 m on average).
     """
 
     scale_error: float = 0.02
@@ -762,7 +748,8 @@ def tracking_odometry(
     first pose is the identity) at ``rate_hz``, stamped from ``start_ns``, with ``drift`` seeded by
     ``seed`` (see ``TrackingDrift``; ``NO_DRIFT`` gives ``camera_truth``). ``mount`` as in ``camera_truth``.
     The yaw error turns about the floor normal as the camera sees it, because a visual-inertial
-    tracker knows gravity and drifts only in heading.
+    tracker knows gravity and drifts only in heading. A real T265 levels its odometry frame with
+    gravity, so its first pose carries the mount's pitch and roll; here the first pose is the identity.
     """
     stamps_ns, positions, rotations = _camera_in_first_pose(plan, mount, rate_hz, start_ns)
     up = _body_mount(mount)[1].inv().apply([0.0, 0.0, 1.0])
@@ -773,7 +760,7 @@ def tracking_odometry(
     yaw_error = np.concatenate([[0.0], np.cumsum(yaw_steps)])
     steps = (1 + drift.scale_error) * np.diff(positions, axis=0)
     steps += drift.position_walk_m_per_sqrt_s * np.sqrt(dt)[:, None] * rng.standard_normal((count - 1, 3))
-    turned = _about(up, yaw_error[:-1]).apply(steps) if count > 1 else steps
+    turned = _about(up, yaw_error[:-1]).apply(steps)
     estimated = np.concatenate([np.zeros((1, 3)), np.cumsum(turned, axis=0)])
     jitter_position = drift.jitter_m * rng.standard_normal((count, 3))
     jitter_yaw = drift.jitter_rad * rng.standard_normal(count)
@@ -793,7 +780,7 @@ def _about(axis: np.ndarray, angles: np.ndarray) -> Rotation:
 
 
 def path_sample() -> list[Segment]:
-    """For the notebooks, about 14 s and 3.5 m: a straight, a stop, a left arc, a short reverse, a spin."""
+    """For the notebooks, about 15 s and 3.3 m: a straight, a stop, a left arc, a short reverse, a spin."""
     return [
         Straight(1.5, 0.5),
         Stop(0.5),
@@ -804,7 +791,7 @@ def path_sample() -> list[Segment]:
 
 
 def path_test() -> list[Segment]:
-    """For unit tests, about 3 s and 1 m: a straight that runs into a smooth left bend."""
+    """For unit tests, about 3 s and 0.8 m: a straight that runs into a smooth left bend."""
     return [Straight(0.3, 0.4), Bend(np.pi / 8, 0.5, 0.35)]
 
 
@@ -825,14 +812,14 @@ def path_short3() -> list[Segment]:
 
 def path_long1() -> list[Segment]:
     """Like the first paper's Test4, a loop: a rectangle with smooth corners driven once round, then a spin
-    and 1.5 m back in reverse (about 15 m)."""
+    and 1.5 m back in reverse (14.7 m)."""
     side = [Straight(2.0, 0.5), Bend(np.pi / 2, 1.8, 0.35), Straight(1.0, 0.5), Bend(np.pi / 2, 1.8, 0.35)]
     return [*side, *side, Stop(1.0), Spin(np.pi / 2, 0.5), Straight(-1.5, 0.3)]
 
 
 def path_long2() -> list[Segment]:
     """Like Test5, S-curves: a straight into two lane changes, a U-turn arc, a reverse leg, a spin and the way
-    back with another lane change (about 16 m)."""
+    back with another lane change (15.5 m)."""
     return [
         Straight(2.0, 0.5),
         SCurve(2.5, 0.6, 0.4),
@@ -849,7 +836,7 @@ def path_long2() -> list[Segment]:
 
 def path_long3() -> list[Segment]:
     """Like Test6, stop-and-go with turns on the spot: out along an L, spinning at its corner, a stop, a
-    reverse, a half turn on the spot, back with a smooth bend, an arc and a short reverse (about 15 m)."""
+    reverse, a half turn on the spot, back with a smooth bend, an arc and a short reverse (13.9 m)."""
     return [
         Straight(3.0, 0.5),
         Spin(np.pi / 2, 0.5),

@@ -27,7 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from gpo.camera import EUCM, Pinhole
 from gpo.sim.floors import FloorTexture
-from gpo.sim.rigs import Rig
+from gpo.sim.rigs import Rig, floor_points, rays_in_base
 
 BLACK, WHITE = 20.0, 220.0  # grey levels of a chessboard's black and white under the scene's light
 CHUNK = 4096  # cv2.remap takes at most 32767 rows, so pixel lists are remapped as (n / CHUNK, CHUNK) maps
@@ -122,15 +122,9 @@ class FloorRenderer:
     def __init__(self, rig: Rig, floor: FloorTexture, sensor: Sensor = Sensor(), room_margin=3.0, room_height=2.8):
         self.rig, self.floor, self.sensor = rig, floor, sensor
         camera = rig.camera
-        height, width = camera.height, camera.width
-        rays, valid = camera.unproject(camera.pixel_grid())
-        self._rays_base = rig.mount.rotation.apply(rays.reshape(-1, 3)).reshape(height, width, 3)
-        origin = rig.mount.position
-        with np.errstate(invalid="ignore", divide="ignore"):
-            reach = -origin[2] / self._rays_base[..., 2]
-        hits_floor = valid & (self._rays_base[..., 2] < -1e-6)
-        floor_xy = origin[:2] + reach[..., None] * self._rays_base[..., :2]
-        floor_xy[~hits_floor] = np.nan
+        self._rays_base, valid = rays_in_base(rig, camera.pixel_grid())
+        floor_xy, hits_floor = floor_points(rig, self._rays_base)
+        hits_floor &= valid
         self.hits_floor, self.valid = hits_floor, valid
         self.floor_points = floor_xy  # (H, W, 2) metres in base_link, NaN where the ray misses the floor
         self._levels = self._mip_levels(floor_xy, hits_floor)
@@ -139,7 +133,7 @@ class FloorRenderer:
         self._room = (x_min - room_margin, x_max + room_margin, y_min - room_margin, y_max + room_margin, room_height)
         self._walls = cv2.pyrDown(cv2.pyrDown(skimage.data.brick())).astype(np.float32)
         self._off_floor = np.flatnonzero((valid & ~hits_floor).ravel())
-        angle = np.arccos(np.clip(rays[..., 2], -1.0, 1.0))
+        angle = np.arccos(np.clip(self._rays_base @ rig.mount.rotation.apply([0.0, 0.0, 1.0]), -1.0, 1.0))
         self._vignetting = np.where(valid, 1.0 - sensor.vignetting * (np.sin(np.minimum(angle, np.pi / 2)) ** 2), 0.0)
 
     def _mip_levels(self, floor_xy: np.ndarray, hits_floor: np.ndarray) -> np.ndarray:

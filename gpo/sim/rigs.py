@@ -101,3 +101,19 @@ def downward_rig() -> Rig:
 
 
 RIGS = {"t265": t265_rig, "downward": downward_rig}
+
+
+def rays_in_base(rig: Rig, pixels) -> tuple[np.ndarray, np.ndarray]:
+    """Unit rays (..., 3) in ``base_link`` of the rig's ``pixels`` (..., 2), and their validity (...)."""
+    rays, valid = rig.camera.unproject(pixels)
+    return rig.mount.rotation.apply(rays.reshape(-1, 3)).reshape(rays.shape), valid
+
+
+def floor_points(rig: Rig, rays_base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where rays (..., 3) from the camera in ``base_link`` meet the floor z = 0: (x, y) (..., 2) metres, NaN
+    where a ray does not point down, and that mask (...)."""
+    origin = rig.mount.position
+    hits = rays_base[..., 2] < -1e-9
+    with np.errstate(invalid="ignore", divide="ignore"):
+        reach = np.where(hits, -origin[2] / rays_base[..., 2], np.nan)
+    return origin[:2] + reach[..., None] * rays_base[..., :2], hits

@@ -1,0 +1,219 @@
+"""Recordings of the simulated rigs, written as ROS bags the way a real robot's would be.
+
+A ``Preset`` names a rig, a path, a floor and a seed. ``simulate`` drives the path, renders every
+camera frame and writes one bag holding:
+
+- the camera images (``sensor_msgs/Image``, mono8) and ``camera_info`` on the rig's topics;
+- ``/mocap/base_link`` (``geometry_msgs/PoseStamped``, 120 Hz): ground truth of ``base_link`` in
+  ``world``, as a motion-capture system would give it;
+- for the fisheye rig, ``/camera/odom/sample`` (``nav_msgs/Odometry``, 200 Hz): the tracking
+  camera's own drifting odometry, ``camera_pose_frame`` in ``camera_odom_frame``, as realsense-ros
+  publishes it;
+- ``/tf_static``: the camera's optical frame (and the tracking camera's body frame) in ``base_link``.
+
+``recording(name)`` is the one call the notebooks make: it generates the preset's bag on first
+use and returns the cached file. Generation is deterministic, so the bag is the same file byte for
+byte every time; the cache key holds a hash of the simulator's own source, so a changed simulator
+makes a new file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pooch
+from tqdm.auto import tqdm
+
+from gpo.bag import BagWriter
+from gpo.sim.floors import make_floor
+from gpo.sim.motion import T265_DRIFT, MotionPlan, named_plan, tracking_odometry
+from gpo.sim.render import Chessboard, FloorBoard, FloorRenderer
+from gpo.sim.rigs import RIGS, Rig
+
+START_NS = 1_700_000_000 * 1_000_000_000  # 2023-11-14 22:13:20 UTC: the first stamp of every recording
+GROUND_TRUTH_TOPIC = "/mocap/base_link"
+ODOMETRY_TOPIC = "/camera/odom/sample"
+TEXEL_M = {"t265": 1e-3, "downward": 5e-4}  # floor texture resolution per rig: finer than a pixel's footprint
+FLOOR_MARGIN_M = {"t265": 2.5, "downward": 0.5}  # textured floor beyond the path, metres
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A recording: ``rig`` (``t265`` or ``downward``), a named ``path`` of ``gpo.sim.motion``, a floor kind.
+
+    ``exposure_s`` > 0 blurs each frame over that exposure (``blur_samples`` poses averaged).
+    """
+
+    rig: str
+    path: str
+    floor: str
+    seed: int
+    description: str
+    exposure_s: float = 0.0
+    blur_samples: int = 3
+
+
+PRESETS = {
+    "sample": Preset("t265", "sample", "raised", 1, "the fisheye rig on a raised floor, ~13 s: the notebooks' sample"),
+    "test": Preset("t265", "test", "raised", 2, "the fisheye rig, ~3 s: for the tests"),
+    **{
+        f"short{k}": Preset("t265", f"short{k}", "raised", 10 + k, f"the fisheye rig, 2-5 m path {k} (Test{k})")
+        for k in (1, 2, 3)
+    },
+    **{
+        f"long{k}": Preset(
+            "t265", f"long{k}", "raised", 20 + k, f"the fisheye rig, 12-17 m path {k} (Test{k + 3})", exposure_s=0.006
+        )
+        for k in (1, 2, 3)
+    },
+    **{
+        f"downward-{kind}": Preset("downward", "downward", kind, 30 + k, f"the downward camera over a {kind} floor")
+        for k, kind in enumerate(("wood", "raised", "industrial"))
+    },
+}
+
+
+def preset(name: str) -> Preset:
+    """The preset called ``name``; a clear error listing the presets otherwise."""
+    if name not in PRESETS:
+        raise ValueError(f"unknown preset {name!r}; the presets are {', '.join(PRESETS)}")
+    return PRESETS[name]
+
+
+def floor_extent(plan: MotionPlan, rig: Rig, margin: float) -> tuple[float, float, float, float]:
+    """(x_min, x_max, y_min, y_max) metres covering the path of the robot and of its camera, plus ``margin``."""
+    state = plan.sample(np.linspace(0.0, plan.duration_s, 400))
+    ahead = np.hypot(*rig.mount.position[:2])
+    x = np.concatenate([state.x - ahead, state.x + ahead])
+    y = np.concatenate([state.y - ahead, state.y + ahead])
+    return x.min() - margin, x.max() + margin, y.min() - margin, y.max() + margin
+
+
+def simulate(name: str, out, format: str = "ros1", progress: bool = True) -> Path:
+    """Render preset ``name`` into a new bag at ``out`` (``format``: ros1, ros2 or ros2-mcap); return its path."""
+    chosen = preset(name)
+    rig = RIGS[chosen.rig]()
+    plan = named_plan(chosen.path)
+    floor = make_floor(
+        chosen.floor, floor_extent(plan, rig, FLOOR_MARGIN_M[chosen.rig]), TEXEL_M[chosen.rig], chosen.seed
+    )
+    renderer = FloorRenderer(rig, floor)
+    frame_times = np.arange(0.0, plan.duration_s, 1.0 / rig.rate_hz)
+    with BagWriter(out, format) as bag:
+        _write_static_tree(bag, rig)
+        bag.add_trajectory(GROUND_TRUTH_TOPIC, plan.ground_truth(120.0, START_NS), msgtype="pose")
+        if chosen.rig == "t265":
+            odometry = tracking_odometry(plan, rig.mount, 200.0, T265_DRIFT, chosen.seed, START_NS)
+            bag.add_trajectory(ODOMETRY_TOPIC, odometry)
+        for index, time_s in enumerate(tqdm(frame_times, desc=f"rendering {name}", disable=not progress)):
+            stamp_ns = START_NS + round(time_s * 1e9)
+            image = renderer.render(_exposure_poses(plan, time_s, chosen), frame_seed=(chosen.seed, index))
+            bag.add_image(rig.image_topic, stamp_ns, image, rig.frame_id)
+            bag.add_camera_info(rig.info_topic, stamp_ns, rig.camera, rig.frame_id)
+    return Path(out)
+
+
+def _exposure_poses(plan: MotionPlan, time_s: float, chosen: Preset) -> np.ndarray:
+    """Poses (K, 3) over the exposure centred on ``time_s``, kept inside the plan."""
+    if chosen.exposure_s <= 0:
+        times = np.array([time_s])
+    else:
+        half = 0.5 * chosen.exposure_s
+        times = np.clip(np.linspace(time_s - half, time_s + half, chosen.blur_samples), 0.0, plan.duration_s)
+    state = plan.sample(times)
+    return np.column_stack([state.x, state.y, state.yaw])
+
+
+def _write_static_tree(bag: BagWriter, rig: Rig) -> None:
+    """The camera's optical frame (and, for the fisheye, the tracking camera's body frame) in base_link."""
+    mount = rig.mount
+    bag.add_static_transform("base_link", rig.frame_id, mount.position, mount.rotation.as_quat(), START_NS)
+    if rig.name == "t265":
+        bag.add_static_transform(
+            "base_link", "camera_pose_frame", mount.position, mount.body_rotation.as_quat(), START_NS
+        )
+
+
+def cache_dir() -> Path:
+    """Where generated recordings are kept: ``$GPO_CACHE_DIR``, else the user's cache folder for gpo."""
+    return Path(os.environ.get("GPO_CACHE_DIR") or pooch.os_cache("gpo") / "recordings")
+
+
+def _source_fingerprint() -> str:
+    """A hash of everything that shapes a recording: the simulator's, camera's and bag writer's sources."""
+    package = Path(__file__).resolve().parents[1]
+    sources = [*sorted(package.glob("sim/*.py")), package / "camera.py", package / "bag.py"]
+    digest = hashlib.sha256()
+    for source in sources:
+        digest.update(source.read_bytes())
+    return digest.hexdigest()[:12]
+
+
+def recording(name: str = "sample", format: str = "ros1", progress: bool = True) -> Path:
+    """The bag of preset ``name``: generated on first use, then read from the cache."""
+    chosen = preset(name)
+    key = hashlib.sha256(repr((asdict(chosen), format, _source_fingerprint())).encode()).hexdigest()[:12]
+    suffix = ".bag" if format == "ros1" else ""
+    path = cache_dir() / f"{name}-{key}{suffix}"
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_name(path.name.replace(key, f"{key}-partial"))
+        if partial.exists():
+            _remove(partial)
+        simulate(name, partial, format, progress)
+        partial.rename(path)
+    return path
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir():
+        for child in path.iterdir():
+            child.unlink()
+        path.rmdir()
+    else:
+        path.unlink()
+
+
+FLOOR_BOARDS = {
+    # a board of 20.0 mm squares (the first paper's Table 1) lying on the floor, in base_link with the robot at rest
+    "t265": FloorBoard(Chessboard((8, 6), 0.020, 0.015), x=0.74, y=-0.06, yaw=0.0),
+    "downward": FloorBoard(Chessboard((8, 6), 0.020, 0.015), x=0.06, y=-0.08, yaw=np.pi / 2),
+}
+
+
+def floor_board_image(rig_name: str, seed: int = 0) -> np.ndarray:
+    """The rig's camera image of ``FLOOR_BOARDS[rig_name]`` on a raised floor, the robot at the world origin."""
+    rig = RIGS[rig_name]()
+    floor = make_floor("raised", (-1.0, 2.0, -1.5, 1.5), TEXEL_M[rig_name], seed)
+    return FloorRenderer(rig, floor).render(np.zeros(3), frame_seed=seed, boards=(FLOOR_BOARDS[rig_name],))
+
+
+def write_sample_data(folder) -> list[Path]:
+    """Write the small sample files kept in the repository's ``data/``; return their paths.
+
+    ``sample_groundtruth.tum`` and ``sample_tracking_odometry.tum``: the sample preset's ground
+    truth (base_link in world, 120 Hz) and the tracking camera's odometry (200 Hz), without
+    rendering the images; ``floor_board_t265.png`` and ``floor_board_downward.png``: each rig's
+    view of a 20 mm chessboard lying on the floor, placed as ``FLOOR_BOARDS`` says.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    chosen = preset("sample")
+    plan = named_plan(chosen.path)
+    rig = RIGS[chosen.rig]()
+    written = [
+        plan.ground_truth(120.0, START_NS).write_tum(folder / "sample_groundtruth.tum"),
+        tracking_odometry(plan, rig.mount, 200.0, T265_DRIFT, chosen.seed, START_NS).write_tum(
+            folder / "sample_tracking_odometry.tum"
+        ),
+    ]
+    for rig_name in FLOOR_BOARDS:
+        path = folder / f"floor_board_{rig_name}.png"
+        cv2.imwrite(str(path), floor_board_image(rig_name), [cv2.IMWRITE_PNG_COMPRESSION, 9])
+        written.append(path)
+    return written
