@@ -6,6 +6,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gpo.camera import EUCM, Pinhole
+from gpo.sim.rigs import Rig, floor_points, rays_in_base
 
 SURFACE_COLOURS = {"floor": "tab:brown", "left wall": "tab:blue", "right wall": "tab:green", "front wall": "tab:purple"}
 
@@ -108,3 +109,24 @@ def field_of_view_text(camera) -> str:
         for name, angle in zip(("horizontal", "vertical", "diagonal"), angles, strict=True)
     ]
     return "field of view: " + ", ".join(parts)
+
+
+def draw_rig_footprint(rig: Rig, ax=None, max_range: float = 1.5, step: int = 8, color: str = "tab:blue") -> plt.Axes:
+    """Top view (``base_link``, metres) of the floor the rig's camera sees within ``max_range`` metres.
+
+    Each dot is the floor point of one pixel of a grid every ``step`` pixels; pixels whose ray misses
+    the floor, or meets it further than ``max_range`` from the camera, are left out.
+    """
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 5))
+    pixels = rig.camera.pixel_grid()[::step, ::step]
+    rays, valid = rays_in_base(rig, pixels)
+    points, hits = floor_points(rig, rays)
+    with np.errstate(invalid="ignore"):
+        seen = valid & hits & (np.linalg.norm(points - rig.mount.position[:2], axis=-1) <= max_range)
+    ax.plot(points[seen, 0], points[seen, 1], ".", ms=1, color=color, label=f"floor seen by {rig.name}")
+    ax.plot(*rig.mount.position[:2], "^", ms=9, color="k", label="camera")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x forward [m]")
+    ax.set_ylabel("y left [m]")
+    return ax

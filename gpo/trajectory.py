@@ -95,6 +95,28 @@ class Trajectory:
         """Distance travelled along the positions, metres."""
         return float(np.linalg.norm(np.diff(self.positions, axis=0), axis=1).sum())
 
+    def compose(self, left=None, right=None, frame_id: str | None = None, child_frame_id: str | None = None):
+        """The poses ``left * T_i * right``: a change of both frames, e.g. camera odometry into base_link.
+
+        ``left`` and ``right`` are rigid transforms (scipy ``Rotation``, translation (3,) metres);
+        None is the identity. With T_i the pose of B in A, ``left`` = pose of A in W and ``right`` =
+        pose of C in B give the pose of C in W, named ``frame_id`` and ``child_frame_id``.
+        """
+        rotations, positions = self.rotations, self.positions
+        if right is not None:
+            positions = positions + rotations.apply(right[1])
+            rotations = rotations * right[0]
+        if left is not None:
+            positions = left[0].apply(positions) + left[1]
+            rotations = left[0] * rotations
+        return Trajectory(
+            self.stamps_ns,
+            positions,
+            rotations.as_quat(),
+            frame_id or self.frame_id,
+            child_frame_id or self.child_frame_id,
+        )
+
     def write_tum(self, path) -> Path:
         """Write as a TUM file; return the path."""
         path = Path(path)

@@ -6,7 +6,9 @@ import dataclasses
 
 import ipywidgets as widgets
 import matplotlib.pyplot as plt
+import numpy as np
 
+from gpo.bag import Recording
 from gpo.camera import EUCM, T265_LIKE
 from gpo.plots import draw_room_in_image, field_of_view_text
 
@@ -46,3 +48,38 @@ def eucm_panel(camera: EUCM = T265_LIKE, camera_height: float = 0.12) -> widgets
     output = widgets.interactive_output(redraw, {"alpha": alpha, "beta": beta, "focal": focal})
     panel = widgets.VBox([widgets.HBox([alpha, beta, focal]), output])
     return panel
+
+
+def recording_browser(path, topic: str | None = None, ground_truth_topic: str = "/mocap/base_link") -> widgets.VBox:
+    """A time slider over a recording: the camera frame at that time beside the ground-truth path.
+
+    Only the one frame shown is read from the bag; ``topic`` is the image topic (found when None).
+    """
+    with Recording(path) as bag:
+        image_topic = bag.image_topic(topic)
+        truth = bag.trajectory(ground_truth_topic)
+        start_ns, duration_s = bag.start_ns, bag.duration_s
+    time = widgets.FloatSlider(
+        value=0.0, min=0.0, max=round(duration_s, 2), step=0.1, description="t [s]", continuous_update=False
+    )
+
+    def redraw(time_s: float) -> None:
+        stamp_ns = start_ns + round(time_s * 1e9)
+        with Recording(path) as bag:
+            frame = next(bag.frames(image_topic, start_ns=stamp_ns, progress=False), None)
+        plt.close("all")
+        _, (left, right) = plt.subplots(1, 2, figsize=(11, 4.6), gridspec_kw={"width_ratios": [1.1, 1]})
+        if frame is not None:
+            left.imshow(frame.image, cmap="gray", vmin=0, vmax=255)
+            left.set_title(f"{image_topic} at {(frame.stamp_ns - start_ns) * 1e-9:.2f} s")
+        left.axis("off")
+        here = min(np.searchsorted(truth.stamps_ns, stamp_ns), len(truth) - 1)
+        right.plot(truth.positions[:, 0], truth.positions[:, 1], color="0.6", lw=1)
+        right.plot(*truth.positions[here, :2], "o", color="tab:red")
+        right.set_aspect("equal")
+        right.set_xlabel("x [m]")
+        right.set_ylabel("y [m]")
+        right.set_title("ground truth of base_link")
+        plt.show()
+
+    return widgets.VBox([time, widgets.interactive_output(redraw, {"time_s": time})])

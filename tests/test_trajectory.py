@@ -24,6 +24,24 @@ def test_planar_heading_and_length():
     assert trajectory.path_length == pytest.approx(5 + 4 + 3)
 
 
+def test_compose_changes_frames_like_homogeneous_matrices():
+    rng = np.random.default_rng(2)
+    trajectory = Trajectory(np.arange(20), rng.normal(size=(20, 3)), Rotation.random(20, rng=3).as_quat())
+    left = (Rotation.random(rng=4), rng.normal(size=3))
+    right = (Rotation.random(rng=5), rng.normal(size=3))
+
+    def matrix(rotation, translation):
+        m = np.eye(4)
+        m[:3, :3], m[:3, 3] = rotation.as_matrix(), translation
+        return m
+
+    composed = trajectory.compose(left, right, "w", "c")
+    for i in range(20):
+        expected = matrix(*left) @ matrix(trajectory.rotations[i], trajectory.positions[i]) @ matrix(*right)
+        np.testing.assert_allclose(matrix(composed.rotations[i], composed.positions[i]), expected, atol=1e-12)
+    assert (composed.frame_id, composed.child_frame_id) == ("w", "c")
+
+
 def test_reads_the_real_groundtruth_file(fetch_or_skip):
     run = "rpg_trajectory_evaluation/results/euroc_vislam_mono/laptop/vislam_ba/laptop_vislam_ba_V1_02"
     path = fetch_or_skip(f"{run}/stamped_groundtruth.txt")
