@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from gpo.sim.boardviews import CALIBRATION_BOARD, board_views
 from gpo.sim.floors import FLOOR_KINDS, make_floor
 from gpo.sim.render import Chessboard, FloorBoard, FloorRenderer, camera_pose_in_world, render_board_view
 from gpo.sim.rigs import downward_rig, t265_rig
@@ -92,3 +93,13 @@ def test_floor_is_deterministic_and_rejects_unknown_kinds():
     assert all(np.array_equal(x, y) for x, y in zip(a.levels, b.levels, strict=True))
     with pytest.raises(ValueError, match="unknown floor kind 'carpet'"):
         make_floor("carpet", (0.0, 1.0, 0.0, 1.0))
+
+
+@pytest.mark.parametrize("rig_name", RIGS)
+def test_calibration_views_fill_the_image_and_their_corners_are_true(rig_name):
+    camera = RIGS[rig_name].camera
+    views = board_views(camera, 4, seed=3)
+    assert all(((v.corners >= 20) & (v.corners <= [camera.width - 20, camera.height - 20])).all() for v in views)
+    for view in views:
+        assert np.median(corner_errors(view.image, CALIBRATION_BOARD, view.corners)) < 0.3
+    assert np.array_equal(board_views(camera, 1, seed=3)[0].image, views[0].image)

@@ -18,6 +18,7 @@ floor (``FloorBoard``) or held anywhere in front of the camera (``render_board_v
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import cv2
@@ -276,7 +277,7 @@ def render_board_view(
         return rotation.inv().apply(on_plane.reshape(-1, 3)).reshape(rays.shape)[..., :2], reach > 0
 
     pixels = camera.pixel_grid()
-    rays, valid = camera.unproject(pixels)
+    rays, valid = _pixel_rays(camera)
     centre_xy, in_front = board_points(rays)
     near = board.shade(centre_xy)[1] & in_front & valid
     u, v = pixels[..., 0], pixels[..., 1]
@@ -286,6 +287,14 @@ def render_board_view(
     rng = np.random.default_rng(seed)
     noise = rng.standard_normal(image.shape) * np.sqrt(sensor.read_noise**2 + sensor.shot_noise**2 * image)
     return np.clip(np.rint(image + noise), 0, 255).astype(np.uint8)
+
+
+@functools.lru_cache(maxsize=4)
+def _pixel_rays(camera: EUCM | Pinhole) -> tuple[np.ndarray, np.ndarray]:
+    """Rays and validity of every pixel centre of ``camera``, kept for the next view of the same camera."""
+    rays, valid = camera.unproject(camera.pixel_grid())
+    rays.flags.writeable = valid.flags.writeable = False
+    return rays, valid
 
 
 def _paint_board(image, camera, board: Chessboard, near: np.ndarray, board_points, samples: int = 4) -> None:
