@@ -10,11 +10,13 @@ import sys
 from pathlib import Path
 
 from matplotlib.figure import Figure
+from scipy.spatial.transform import Rotation
 
-from gpo.bag import describe
+from gpo.bag import Recording, describe
 from gpo.camera import EUCM, T265_LIKE, Pinhole
-from gpo.plots import draw_projection_curves, draw_room_in_image, field_of_view_text
-from gpo.sim.record import PRESETS, recording, simulate, write_sample_data
+from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
+from gpo.sim.record import GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, PRESETS, recording, simulate, write_sample_data
+from gpo.trajectory import base_from_sensor_odometry
 
 
 def demo(out: Path) -> list[Path]:
@@ -46,13 +48,45 @@ def demo(out: Path) -> list[Path]:
 
     written.append(out / "field_of_view.txt")
     written[-1].write_text("".join(f"{label}: {field_of_view_text(camera)}\n" for label, camera in cameras.items()))
-    return written
+    return written + sample_recording_figures(out)
+
+
+def sample_recording_figures(out: Path) -> list[Path]:
+    """Frames and paths of the sample recording (rendered on first use): PNG figures and TUM files in ``out``."""
+    with Recording(recording("sample")) as bag:
+        topic = bag.image_topic()
+        start = bag.start_ns
+        frames = [next(bag.frames(topic, start_ns=start + round(t * 1e9), progress=False)) for t in (0.0, 6.0, 12.0)]
+        truth = bag.trajectory(GROUND_TRUTH_TOPIC)
+        odometry = bag.trajectory(ODOMETRY_TOPIC)
+        translation, quaternion = bag.static_transform("base_link", "camera_pose_frame")
+    fig = Figure(figsize=(13, 4.2))
+    for ax, frame in zip(fig.subplots(1, 3), frames, strict=True):
+        ax.imshow(frame.image, cmap="gray", vmin=0, vmax=255)
+        ax.set_title(f"{topic}, t = {(frame.stamp_ns - start) * 1e-9:.1f} s")
+        ax.axis("off")
+    frames_png = out / "sample_frames.png"
+    fig.savefig(frames_png, dpi=90, bbox_inches="tight")
+
+    tracked = base_from_sensor_odometry(
+        odometry, (Rotation.from_quat(quaternion), translation), (truth.rotations[0], truth.positions[0])
+    )
+    fig = Figure(figsize=(7, 5))
+    draw_paths({"ground truth": truth, "tracking camera's odometry": tracked}, ax=fig.subplots())
+    paths_png = out / "sample_paths.png"
+    fig.savefig(paths_png, dpi=110, bbox_inches="tight")
+    return [
+        frames_png,
+        paths_png,
+        truth.write_tum(out / "sample_groundtruth.tum"),
+        tracked.write_tum(out / "sample_tracking_odometry_base.tum"),
+    ]
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m gpo", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
-    demo_parser = commands.add_parser("demo", help="write the suite's figures and tables into a folder")
+    demo_parser = commands.add_parser("demo", help="write the suite's figures, tables and trajectories into a folder")
     demo_parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default: out)")
     simulate_parser = commands.add_parser("simulate", help="render a simulated recording into a ROS bag")
     simulate_parser.add_argument("--preset", required=True, choices=sorted(PRESETS), help="what to record")

@@ -130,3 +130,19 @@ def draw_rig_footprint(rig: Rig, ax=None, max_range: float = 1.5, step: int = 8,
     ax.set_xlabel("x forward [m]")
     ax.set_ylabel("y left [m]")
     return ax
+
+
+def draw_paths(paths: dict, ax=None, styles: dict | None = None) -> plt.Axes:
+    """Top view of trajectories (label -> ``gpo.trajectory.Trajectory``), x and y in metres, with the start marked."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 5))
+    styles = styles or {}
+    for label, trajectory in paths.items():
+        ax.plot(trajectory.positions[:, 0], trajectory.positions[:, 1], label=label, **styles.get(label, {}))
+    first = next(iter(paths.values()))
+    ax.plot(*first.positions[0, :2], "go", label="start")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.legend(fontsize="small")
+    return ax

@@ -161,3 +161,20 @@ def _seconds_text_to_ns(text: str) -> int:
     if not (whole.lstrip("+-").isdigit() or whole.lstrip("+-") == "") or not fraction.isdigit():
         raise ValueError(text)
     return int(whole or "0") * NS_PER_S + sign * int(fraction)
+
+
+def base_from_sensor_odometry(
+    odometry: Trajectory, sensor_in_base: tuple[Rotation, np.ndarray], start: tuple[Rotation, np.ndarray]
+) -> Trajectory:
+    """A sensor's own odometry turned into the path of ``base_link`` in ``world``.
+
+    ``odometry`` holds the sensor frame C in its odometry frame O, which is where C was at the
+    first sample (as a T265 reports it); ``sensor_in_base`` is C's pose in ``base_link`` B (the
+    mount: rotation, translation in metres) and ``start`` the pose of B in ``world`` W at the first
+    sample. Then ``T_WB(t) = T_WB(0) T_BC T_OC(t) T_BC^-1``.
+    """
+    mount_rotation, mount_translation = sensor_in_base
+    start_rotation, start_position = start
+    odometry_in_world = (start_rotation * mount_rotation, start_rotation.apply(mount_translation) + start_position)
+    base_in_sensor = (mount_rotation.inv(), -mount_rotation.inv().apply(mount_translation))
+    return odometry.compose(odometry_in_world, base_in_sensor, "world", "base_link")

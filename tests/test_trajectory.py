@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gpo.trajectory import Trajectory
+from gpo.trajectory import Trajectory, base_from_sensor_odometry
 
 
 def test_tum_round_trip_keeps_every_nanosecond_and_value(tmp_path):
@@ -40,6 +40,22 @@ def test_compose_changes_frames_like_homogeneous_matrices():
         expected = matrix(*left) @ matrix(trajectory.rotations[i], trajectory.positions[i]) @ matrix(*right)
         np.testing.assert_allclose(matrix(composed.rotations[i], composed.positions[i]), expected, atol=1e-12)
     assert (composed.frame_id, composed.child_frame_id) == ("w", "c")
+
+
+def test_sensor_odometry_of_a_rigid_mount_gives_back_the_base_path():
+    """A sensor rigidly mounted on the robot, its odometry built independently from the base path, maps back."""
+    rng = np.random.default_rng(6)
+    base = Trajectory(np.arange(50), rng.normal(size=(50, 3)), Rotation.random(50, rng=7).as_quat(), "world")
+    mount = (Rotation.random(rng=8), rng.normal(size=3))
+    sensor_rotations = base.rotations * mount[0]
+    sensor_positions = base.positions + base.rotations.apply(mount[1])
+    first = sensor_rotations[0].inv()
+    odometry = Trajectory(
+        base.stamps_ns, first.apply(sensor_positions - sensor_positions[0]), (first * sensor_rotations).as_quat()
+    )
+    again = base_from_sensor_odometry(odometry, mount, (base.rotations[0], base.positions[0]))
+    np.testing.assert_allclose(again.positions, base.positions, atol=1e-12)
+    np.testing.assert_allclose(np.abs(np.sum(again.quaternions * base.quaternions, axis=1)), 1.0, atol=1e-12)
 
 
 def test_reads_the_real_groundtruth_file(fetch_or_skip):

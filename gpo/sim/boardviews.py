@@ -74,4 +74,3 @@ def board_views(camera: EUCM | Pinhole, count: int = 20, board: Chessboard = CAL
         corners, _ = camera.project(rotation.apply(board.inner_corners()) + position)
         views.append(BoardView(image, rotation, position, corners))
     return views
-
