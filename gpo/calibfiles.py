@@ -47,10 +47,11 @@ def load_kalibr(path) -> dict[str, Camera]:
     document = yaml.safe_load(path.read_text())
     if not isinstance(document, Mapping) or not document:
         raise ValueError(f"{path}: not a Kalibr camchain (expected a mapping of cam0, cam1, ...)")
-    return {name: _camera_from_kalibr(entry, f"{path}, {name}") for name, entry in document.items()}
+    return {name: camera_from_kalibr(entry, f"{path}, {name}") for name, entry in document.items()}
 
 
-def _camera_from_kalibr(entry: Mapping, where: str) -> Camera:
+def camera_from_kalibr(entry: Mapping, where: str) -> Camera:
+    """The camera of one Kalibr camchain entry (a mapping); ``where`` names it in error messages."""
     model = _field(entry, "camera_model", where)
     intrinsics = [float(v) for v in _field(entry, "intrinsics", where)]
     width, height = _field(entry, "resolution", where)
@@ -72,7 +73,8 @@ def _camera_from_kalibr(entry: Mapping, where: str) -> Camera:
     )
 
 
-def _camera_to_kalibr(camera: Camera, name: str) -> dict:
+def camera_to_kalibr(camera: Camera, name: str) -> dict:
+    """One Kalibr camchain entry (without ``rostopic``) for ``camera``; ``name`` names it in error messages."""
     if isinstance(camera, EUCM):
         return {
             "camera_model": "eucm",
@@ -99,7 +101,7 @@ def save_kalibr(path, cameras: Mapping[str, Camera], rostopics: Mapping[str, str
     """Write ``cameras`` (name -> camera) as a Kalibr camchain YAML; ``rostopics`` maps name -> topic."""
     document = {}
     for name, camera in cameras.items():
-        document[name] = _camera_to_kalibr(camera, name)
+        document[name] = camera_to_kalibr(camera, name)
         if rostopics and name in rostopics:
             document[name]["rostopic"] = rostopics[name]
     path = Path(path)

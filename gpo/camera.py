@@ -264,7 +264,8 @@ class Pinhole(_Camera):
     where z > 0 and r lies where the radial polynomial still grows with r (beyond that radius
     distinct rays would land on the same pixel).
 
-    ``dist`` is (k1, k2, p1, p2) or (k1, k2, p1, p2, k3), OpenCV's order.
+    ``dist`` is (k1, k2, p1, p2) or (k1, k2, p1, p2, k3), OpenCV's order; it is kept as five values, k3 = 0
+    when not given.
     """
 
     fx: float
@@ -286,7 +287,7 @@ class Pinhole(_Camera):
             raise ValueError(f"dist must be (k1, k2, p1, p2) or (k1, k2, p1, p2, k3), got {len(dist)} values")
         for name, value in zip(("k1", "k2", "p1", "p2", "k3"), dist, strict=False):
             _check_finite(name, value)
-        object.__setattr__(self, "dist", dist)
+        object.__setattr__(self, "dist", (*dist, 0.0)[:5])  # always (k1, k2, p1, p2, k3)
 
     @property
     def principal_point(self) -> tuple[float, float]:
@@ -304,7 +305,7 @@ class Pinhole(_Camera):
         The radial map r -> r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at the smallest
         positive root s = r^2 of 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3; infinite when there is none.
         """
-        k1, k2, k3 = self.dist[0], self.dist[1], self.dist[4] if len(self.dist) == 5 else 0.0
+        k1, k2, k3 = self.dist[0], self.dist[1], self.dist[4]
         roots = np.roots(np.trim_zeros([7.0 * k3, 5.0 * k2, 3.0 * k1, 1.0], "f"))
         positive = [s.real for s in roots if abs(s.imag) < 1e-12 and s.real > 0]
         return math.sqrt(min(positive)) if positive else math.inf
@@ -314,7 +315,7 @@ class Pinhole(_Camera):
 
         The Jacobian d(xd, yd)/d(xn, yn) is symmetric; it is returned as its entries (j_xx, j_xy, j_yy).
         """
-        k1, k2, p1, p2, k3 = (*self.dist, 0.0)[:5]
+        k1, k2, p1, p2, k3 = self.dist
         r2 = xn * xn + yn * yn
         radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
         dradial = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3)  # d radial / d r^2

@@ -6,7 +6,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gpo.camera import EUCM, Pinhole
-from gpo.sim.rigs import Rig, floor_points, rays_in_base
+from gpo.rig import Rig, floor_points, rays_in_base
 
 SURFACE_COLOURS = {"floor": "tab:brown", "left wall": "tab:blue", "right wall": "tab:green", "front wall": "tab:purple"}
 

@@ -690,7 +690,7 @@ NO_DRIFT = TrackingDrift(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 def _body_mount(mount) -> tuple[np.ndarray, Rotation]:
     """(position (3,) m, rotation base <- camera body) from a (translation, rotation) pair, the rotation a
-    scipy ``Rotation`` or a quaternion (x, y, z, w); or from a ``gpo.sim.rigs.CameraMount`` (its body frame)."""
+    scipy ``Rotation`` or a quaternion (x, y, z, w); or from a ``gpo.rig.CameraMount`` (its body frame)."""
     if hasattr(mount, "body_rotation"):
         return np.asarray(mount.position, dtype=np.float64), mount.body_rotation
     translation, rotation = mount
@@ -728,7 +728,7 @@ def camera_truth(plan: MotionPlan, mount, rate_hz: float = 200.0, start_ns: int 
     """The tracking camera's exact pose: ``camera_pose_frame`` in ``camera_odom_frame``, identity at the first sample.
 
     ``mount`` is the camera body frame (x forward, y left, z up) in base_link: a pair (translation (3,) m,
-    rotation as a scipy ``Rotation`` or a quaternion (x, y, z, w)), or a ``gpo.sim.rigs.CameraMount``.
+    rotation as a scipy ``Rotation`` or a quaternion (x, y, z, w)), or a ``gpo.rig.CameraMount``.
     """
     stamps_ns, positions, rotations = _camera_in_first_pose(plan, mount, rate_hz, start_ns)
     return Trajectory(stamps_ns, positions, rotations.as_quat(), "camera_odom_frame", "camera_pose_frame")

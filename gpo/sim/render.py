@@ -27,8 +27,8 @@ import skimage.data
 from scipy.spatial.transform import Rotation
 
 from gpo.camera import EUCM, Pinhole
+from gpo.rig import Rig, floor_points, rays_in_base
 from gpo.sim.floors import FloorTexture
-from gpo.sim.rigs import Rig, floor_points, rays_in_base
 
 BLACK, WHITE = 20.0, 220.0  # grey levels of a chessboard's black and white under the scene's light
 CHUNK = 4096  # cv2.remap takes at most 32767 rows, so pixel lists are remapped as (n / CHUNK, CHUNK) maps
