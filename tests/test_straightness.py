@@ -25,7 +25,7 @@ def test_lines_in_space_are_straight_only_through_the_true_model():
     rotation = Rotation.from_euler("xyz", [0.3, -0.5, 0.2])
     u, v = np.meshgrid(np.linspace(-0.4, 0.4, 9), np.linspace(-0.3, 0.3, 7))
     board = np.stack([u, v, np.zeros_like(u)], -1).reshape(-1, 3)
-    grid = (rotation.apply(board) + [0.0, 0.0, 0.35]).reshape(7, 9, 3)
+    grid = (rotation.apply(board) + np.array([0.0, 0.0, 0.35])).reshape(7, 9, 3)
     pixels, valid = T265_LIKE.project(grid)
     assert valid.all()
     lines = [*pixels, *pixels.transpose(1, 0, 2)]
