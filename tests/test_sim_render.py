@@ -8,8 +8,9 @@ from scipy.spatial.transform import Rotation
 
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_views
 from gpo.sim.floors import FLOOR_KINDS, make_floor
-from gpo.sim.render import Chessboard, FloorBoard, FloorRenderer, camera_pose_in_world, render_board_view
+from gpo.sim.render import FloorRenderer, camera_pose_in_world, render_board_view
 from gpo.sim.rigs import downward_rig, t265_rig
+from gpo.targets import Chessboard, FloorBoard
 
 RIGS = {"t265": t265_rig(), "downward": downward_rig()}
 

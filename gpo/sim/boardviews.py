@@ -13,7 +13,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from gpo.camera import EUCM, Pinhole
-from gpo.sim.render import Chessboard, render_board_view
+from gpo.sim.render import render_board_view
+from gpo.targets import Chessboard
 
 CALIBRATION_BOARD = Chessboard((8, 6), 0.030, 0.020)
 

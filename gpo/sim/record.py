@@ -33,8 +33,9 @@ from gpo.bag import BagWriter
 from gpo.rig import Rig
 from gpo.sim.floors import make_floor
 from gpo.sim.motion import T265_DRIFT, MotionPlan, named_plan, tracking_odometry
-from gpo.sim.render import Chessboard, FloorBoard, FloorRenderer
+from gpo.sim.render import FloorRenderer
 from gpo.sim.rigs import RIGS
+from gpo.targets import Chessboard, FloorBoard
 
 START_NS = 1_700_000_000 * 1_000_000_000  # 2023-11-14 22:13:20 UTC: the first stamp of every recording
 GROUND_TRUTH_TOPIC = "/mocap/base_link"
@@ -148,7 +149,13 @@ def cache_dir() -> Path:
 def _source_fingerprint() -> str:
     """A hash of everything that shapes a recording: the simulator's, camera's and bag writer's sources."""
     package = Path(__file__).resolve().parents[1]
-    sources = [*sorted(package.glob("sim/*.py")), package / "camera.py", package / "rig.py", package / "bag.py"]
+    sources = [
+        *sorted(package.glob("sim/*.py")),
+        package / "camera.py",
+        package / "rig.py",
+        package / "targets.py",
+        package / "bag.py",
+    ]
     digest = hashlib.sha256()
     for source in sources:
         digest.update(source.read_bytes())

@@ -42,4 +42,3 @@ def downward_rig() -> Rig:
 
 
 RIGS = {"t265": t265_rig, "downward": downward_rig}
-
