@@ -3,9 +3,9 @@
 Kalibr camchain YAML (one block per camera, ``cam0``, ``cam1``, ...)::
 
     cam0:
-      camera_model: eucm            # or pinhole
-      intrinsics: [alpha, beta, fu, fv, pu, pv]   # pinhole: [fu, fv, pu, pv]
-      distortion_model: none        # pinhole: radtan (or none)
+      camera_model: eucm            # or pinhole, or omni
+      intrinsics: [alpha, beta, fu, fv, pu, pv]   # pinhole: [fu, fv, pu, pv]; omni: [xi, fu, fv, pu, pv]
+      distortion_model: none        # pinhole and omni: radtan (or none)
       distortion_coeffs: []         # radtan: [k1, k2, r1, r2]
       resolution: [width, height]
       rostopic: /cam0/image_raw
@@ -30,15 +30,24 @@ from pathlib import Path
 
 import yaml
 
-from gpo.camera import EUCM, EUCM_PARAMETER_NAMES, Pinhole
+from gpo.camera import EUCM, EUCM_PARAMETER_NAMES, Omni, Pinhole
 
-Camera = EUCM | Pinhole
+Camera = EUCM | Pinhole | Omni
 
 
 def _field(entry: Mapping, key: str, where: str):
     if key not in entry:
         raise ValueError(f"{where}: missing the field '{key}'")
     return entry[key]
+
+
+def _radtan_coeffs(distortion: str, coeffs: list[float], where: str) -> tuple[float, ...]:
+    """(k1, k2, p1, p2) of a 'radtan' entry, zeros for 'none'; ``where`` names the entry in error messages."""
+    if distortion == "none":
+        return (0.0, 0.0, 0.0, 0.0)
+    if len(coeffs) != 4:
+        raise ValueError(f"{where}: radtan needs 4 distortion_coeffs [k1, k2, r1, r2], got {len(coeffs)}")
+    return tuple(coeffs)
 
 
 def load_kalibr(path) -> dict[str, Camera]:
@@ -61,15 +70,15 @@ def camera_from_kalibr(entry: Mapping, where: str) -> Camera:
         alpha, beta, fx, fy, cx, cy = intrinsics
         return EUCM(fx, fy, cx, cy, alpha, beta, width, height)
     if model == "pinhole" and distortion in ("radtan", "none") and len(intrinsics) == 4:
-        if distortion == "none":
-            coeffs = [0.0, 0.0, 0.0, 0.0]
-        if len(coeffs) != 4:
-            raise ValueError(f"{where}: radtan needs 4 distortion_coeffs [k1, k2, r1, r2], got {len(coeffs)}")
-        return Pinhole(*intrinsics, tuple(coeffs), width, height)
+        return Pinhole(*intrinsics, _radtan_coeffs(distortion, coeffs, where), width, height)
+    if model == "omni" and distortion in ("radtan", "none") and len(intrinsics) == 5:
+        xi, fu, fv, pu, pv = intrinsics
+        return Omni(fu, fv, pu, pv, xi, _radtan_coeffs(distortion, coeffs, where), width, height)
     raise ValueError(
         f"{where}: unsupported camera model '{model}' with distortion '{distortion}' and "
-        f"{len(intrinsics)} intrinsics; supported are 'eucm' (6 intrinsics, distortion 'none') "
-        "and 'pinhole' (4 intrinsics, distortion 'radtan' or 'none')"
+        f"{len(intrinsics)} intrinsics; supported are 'eucm' (6 intrinsics, distortion 'none'), "
+        "'pinhole' (4 intrinsics, distortion 'radtan' or 'none') and 'omni' (5 intrinsics, distortion 'radtan' "
+        "or 'none')"
     )
 
 
@@ -92,6 +101,14 @@ def camera_to_kalibr(camera: Camera, name: str) -> dict:
             "intrinsics": [camera.fx, camera.fy, camera.cx, camera.cy],
             "distortion_model": "radtan",
             "distortion_coeffs": [k1, k2, p1, p2],
+            "resolution": [camera.width, camera.height],
+        }
+    if isinstance(camera, Omni):
+        return {
+            "camera_model": "omni",
+            "intrinsics": [camera.xi, camera.fx, camera.fy, camera.cx, camera.cy],
+            "distortion_model": "radtan",
+            "distortion_coeffs": list(camera.dist),
             "resolution": [camera.width, camera.height],
         }
     raise TypeError(f"{name}: cannot write a {type(camera).__name__} as a Kalibr camera")

@@ -1,5 +1,5 @@
-"""Camera models: the extended unified camera model (EUCM) and the pinhole camera with
-OpenCV's radial-tangential distortion.
+"""Camera models: the extended unified camera model (EUCM), the pinhole camera with OpenCV's
+radial-tangential distortion, and Mei's unified (omnidirectional) model with that same distortion.
 
 Frames and units
 ----------------
@@ -20,7 +20,9 @@ References
 ----------
 EUCM: B. Khomutenko, G. Garcia, P. Martinet, "An Enhanced Unified Camera Model", IEEE Robotics
 and Automation Letters 1(1), 2016; written here as in the first paper's eqs. 1-7 and as Basalt
-implements it. Pinhole: OpenCV's ``projectPoints`` model with (k1, k2, p1, p2[, k3]).
+implements it. Pinhole: OpenCV's ``projectPoints`` model with (k1, k2, p1, p2[, k3]). Omni: C. Mei,
+P. Rives, "Single View Point Omnidirectional Camera Calibration from Planar Grids", ICRA 2007, with
+radial-tangential distortion (k1, k2, p1, p2) as Kalibr's ``omni`` + ``radtan`` and OpenCV's ``cv2.omnidir``.
 """
 
 from __future__ import annotations
@@ -251,8 +253,94 @@ class EUCM(_Camera):
         return rays, valid
 
 
+_RADTAN_NAMES = ("k1", "k2", "p1", "p2", "k3")
+
+
+def _check_radtan(dist, lengths: tuple[int, ...]) -> tuple[float, ...]:
+    """``dist`` as a tuple of finite floats (k1, k2, p1, p2[, k3]) of one of the ``lengths``, else ValueError."""
+    dist = tuple(float(c) for c in np.ravel(dist))
+    if len(dist) not in lengths:
+        forms = " or ".join(f"({', '.join(_RADTAN_NAMES[:length])})" for length in lengths)
+        raise ValueError(f"dist must be {forms}, got {len(dist)} values")
+    for name, value in zip(_RADTAN_NAMES, dist, strict=False):
+        _check_finite(name, value)
+    return dist
+
+
+class _RadialTangential:
+    """OpenCV's radial-tangential distortion on the normalised image plane, shared by `Pinhole` and `Omni`.
+
+    ``dist`` holds (k1, k2, p1, p2) or (k1, k2, p1, p2, k3), OpenCV's order (k3 = 0 when absent). A point
+    (xn, yn) of the normalised plane (dimensionless) with r^2 = xn^2 + yn^2 is distorted to::
+
+        xd = xn (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 xn yn + p2 (r^2 + 2 xn^2)
+        yd = yn (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 yn^2) + 2 p2 xn yn
+    """
+
+    dist: tuple[float, ...]
+
+    @property
+    def _coefficients(self) -> tuple[float, float, float, float, float]:
+        """(k1, k2, p1, p2, k3), k3 = 0 when ``dist`` has four values."""
+        return (*self.dist, 0.0)[:5]
+
+    @property
+    def max_radius(self) -> float:
+        """Largest undistorted radius r = |(xn, yn)| on the normalised plane up to which the radial distortion
+        grows with r.
+
+        The radial map r -> r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at the smallest
+        positive root s = r^2 of 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3; infinite when there is none.
+        """
+        k1, k2, _, _, k3 = self._coefficients
+        roots = np.roots(np.trim_zeros([7.0 * k3, 5.0 * k2, 3.0 * k1, 1.0], "f"))
+        positive = [s.real for s in roots if abs(s.imag) < 1e-12 and s.real > 0]
+        return math.sqrt(min(positive)) if positive else math.inf
+
+    def _distort(self, xn: np.ndarray, yn: np.ndarray):
+        """Distorted normalised coordinates (xd, yd) of (xn, yn), and their Jacobian.
+
+        The Jacobian d(xd, yd)/d(xn, yn) is symmetric; it is returned as its entries (j_xx, j_xy, j_yy).
+        """
+        k1, k2, p1, p2, k3 = self._coefficients
+        r2 = xn * xn + yn * yn
+        radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        dradial = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3)  # d radial / d r^2
+        xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn)
+        yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn
+        j_xx = radial + 2.0 * xn * xn * dradial + 2.0 * p1 * yn + 6.0 * p2 * xn
+        j_xy = 2.0 * xn * yn * dradial + 2.0 * p1 * xn + 2.0 * p2 * yn
+        j_yy = radial + 2.0 * yn * yn * dradial + 6.0 * p1 * yn + 2.0 * p2 * xn
+        return xd, yd, (j_xx, j_xy, j_yy)
+
+    def _undistort(self, target_x: np.ndarray, target_y: np.ndarray, iterations: int):
+        """Undistorted normalised coordinates (xn, yn) of the distorted (target_x, target_y).
+
+        Newton's method from the distorted point, at most ``iterations`` steps, stopping once every
+        point distorts back within 1e-13. Callers check the result by projecting it again.
+        """
+        xn, yn = target_x.copy(), target_y.copy()
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for _ in range(iterations):
+                xd, yd, (j_xx, j_xy, j_yy) = self._distort(xn, yn)
+                error_x, error_y = xd - target_x, yd - target_y
+                if not (np.any(np.abs(error_x) > 1e-13) or np.any(np.abs(error_y) > 1e-13)):
+                    break
+                determinant = j_xx * j_yy - j_xy * j_xy
+                xn -= (j_yy * error_x - j_xy * error_y) / determinant
+                yn -= (j_xx * error_y - j_xy * error_x) / determinant
+        return xn, yn
+
+
+def _round_trip_valid(camera, rays: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """True where ``rays (..., 3)`` project validly back onto the pixels ``uv (..., 2)`` within 1e-6 px."""
+    back, valid = camera.project(rays)
+    with np.errstate(invalid="ignore"):
+        return valid & np.all(np.abs(back - uv) <= 1e-6, axis=-1)
+
+
 @dataclass(frozen=True)
-class Pinhole(_Camera):
+class Pinhole(_RadialTangential, _Camera):
     """Pinhole camera with OpenCV's radial-tangential distortion.
 
     With (x', y') = (x / z, y / z) and r^2 = x'^2 + y'^2, the distorted normalised point is::
@@ -282,11 +370,7 @@ class Pinhole(_Camera):
         _check_positive("fy", self.fy)
         _check_finite("cx", self.cx)
         _check_finite("cy", self.cy)
-        dist = tuple(float(c) for c in np.ravel(self.dist))
-        if len(dist) not in (4, 5):
-            raise ValueError(f"dist must be (k1, k2, p1, p2) or (k1, k2, p1, p2, k3), got {len(dist)} values")
-        for name, value in zip(("k1", "k2", "p1", "p2", "k3"), dist, strict=False):
-            _check_finite(name, value)
+        dist = _check_radtan(self.dist, (4, 5))
         object.__setattr__(self, "dist", (*dist, 0.0)[:5])  # always (k1, k2, p1, p2, k3)
 
     @property
@@ -297,34 +381,6 @@ class Pinhole(_Camera):
     def camera_matrix(self) -> np.ndarray:
         """The 3x3 intrinsic matrix K."""
         return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
-
-    @property
-    def max_radius(self) -> float:
-        """Largest undistorted radius r = |(x/z, y/z)| up to which the radial distortion grows with r.
-
-        The radial map r -> r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at the smallest
-        positive root s = r^2 of 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3; infinite when there is none.
-        """
-        k1, k2, k3 = self.dist[0], self.dist[1], self.dist[4]
-        roots = np.roots(np.trim_zeros([7.0 * k3, 5.0 * k2, 3.0 * k1, 1.0], "f"))
-        positive = [s.real for s in roots if abs(s.imag) < 1e-12 and s.real > 0]
-        return math.sqrt(min(positive)) if positive else math.inf
-
-    def _distort(self, xn: np.ndarray, yn: np.ndarray):
-        """Distorted normalised coordinates (xd, yd) of (xn, yn) = (x/z, y/z), and their Jacobian.
-
-        The Jacobian d(xd, yd)/d(xn, yn) is symmetric; it is returned as its entries (j_xx, j_xy, j_yy).
-        """
-        k1, k2, p1, p2, k3 = self.dist
-        r2 = xn * xn + yn * yn
-        radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
-        dradial = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3)  # d radial / d r^2
-        xd = xn * radial + 2.0 * p1 * xn * yn + p2 * (r2 + 2.0 * xn * xn)
-        yd = yn * radial + p1 * (r2 + 2.0 * yn * yn) + 2.0 * p2 * xn * yn
-        j_xx = radial + 2.0 * xn * xn * dradial + 2.0 * p1 * yn + 6.0 * p2 * xn
-        j_xy = 2.0 * xn * yn * dradial + 2.0 * p1 * xn + 2.0 * p2 * yn
-        j_yy = radial + 2.0 * yn * yn * dradial + 6.0 * p1 * yn + 2.0 * p2 * xn
-        return xd, yd, (j_xx, j_xy, j_yy)
 
     def project(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Pixels ``(..., 2)`` and validity mask ``(...)`` of camera-frame points ``(..., 3)``."""
@@ -347,21 +403,108 @@ class Pinhole(_Camera):
         within 1e-6 px.
         """
         uv = _as_array(uv, 2, "pixels")
-        target_x, target_y = (uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy
-        xn, yn = target_x.copy(), target_y.copy()
+        xn, yn = self._undistort((uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy, iterations)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            for _ in range(iterations):
-                xd, yd, (j_xx, j_xy, j_yy) = self._distort(xn, yn)
-                error_x, error_y = xd - target_x, yd - target_y
-                if not (np.any(np.abs(error_x) > 1e-13) or np.any(np.abs(error_y) > 1e-13)):
-                    break
-                determinant = j_xx * j_yy - j_xy * j_xy
-                xn -= (j_yy * error_x - j_xy * error_y) / determinant
-                yn -= (j_xx * error_y - j_xy * error_x) / determinant
             rays = np.stack([xn, yn, np.ones_like(xn)], axis=-1)
             rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
-            back, valid = self.project(rays)
-            valid &= np.all(np.abs(back - uv) <= 1e-6, axis=-1)
+        valid = _round_trip_valid(self, rays, uv)
+        rays[~valid] = np.nan
+        return rays, valid
+
+
+@dataclass(frozen=True)
+class Omni(_RadialTangential, _Camera):
+    """Unified camera model of Mei with radial-tangential distortion: Kalibr's ``omni`` + ``radtan``.
+
+    A point p = (x, y, z) is put on the unit sphere and seen from a centre ``xi`` sphere radii behind
+    the sphere's centre, on the normalised plane (Mei and Rives 2007, projection steps 1-5)::
+
+        s = p / |p|
+        (mx, my) = (s_x / (s_z + xi), s_y / (s_z + xi))
+
+    then (mx, my) is distorted as in `Pinhole` (k1, k2, p1, p2; no k3) into (mx'', my'') and
+    (u, v) = (fx mx'' + cx, fy my'' + cy); unlike Mei's K there is no skew, as in Kalibr.
+
+    Valid region. A ray theta off the optical axis lands at the radius r = sin(theta) / (cos(theta) + xi),
+    and dr/dtheta = (1 + xi cos(theta)) / (cos(theta) + xi)^2. The point must lie in front of the projection
+    centre (s_z + xi > 0), and r must still grow with theta (s_z > -1/xi), else two rays share a pixel::
+
+        s_z > -w,  w = xi for xi <= 1,  w = 1 / xi for xi > 1
+
+    as Kalibr's ``OmniProjection`` and `EUCM` have it; and r must lie within ``max_radius``, where the radial
+    distortion still grows.
+
+    Unprojection: the distortion is inverted by Newton's method, then (mx, my) is lifted onto the sphere
+    with Mei's closed form::
+
+        r^2 = mx^2 + my^2
+        eta = (xi + sqrt(1 + (1 - xi^2) r^2)) / (1 + r^2)
+        s = (eta mx, eta my, eta - xi)
+
+    which exists for r^2 <= 1 / (xi^2 - 1) when xi > 1, i.e. up to the fold s_z = -1/xi. A pixel is valid
+    where its ray projects back onto it within 1e-6 px.
+
+    Without distortion this is `EUCM` with alpha = xi / (1 + xi), beta = 1 and focal lengths f / (1 + xi);
+    with xi = 0 it is `Pinhole`.
+
+    Parameters: ``fx, fy`` (Kalibr's fu, fv) in pixels, ``cx, cy`` (Kalibr's pu, pv) the principal point in
+    pixels, ``xi`` >= 0 (dimensionless), ``dist`` = (k1, k2, p1, p2), ``width, height`` the image size in
+    pixels. Reference: C. Mei, P. Rives, "Single View Point Omnidirectional Camera Calibration from Planar
+    Grids", ICRA 2007.
+    """
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    xi: float
+    dist: tuple[float, ...]
+    width: int
+    height: int
+
+    def __post_init__(self):
+        _check_image_size(self)
+        _check_positive("fx", self.fx)
+        _check_positive("fy", self.fy)
+        _check_finite("cx", self.cx)
+        _check_finite("cy", self.cy)
+        if _check_finite("xi", self.xi) < 0:
+            raise ValueError(f"xi must be >= 0, got {self.xi}")
+        object.__setattr__(self, "dist", _check_radtan(self.dist, (4,)))
+
+    @property
+    def principal_point(self) -> tuple[float, float]:
+        return self.cx, self.cy
+
+    @property
+    def _w(self) -> float:
+        """Valid points have s_z > -w on the unit sphere."""
+        return self.xi if self.xi <= 1.0 else 1.0 / self.xi
+
+    def project(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels ``(..., 2)`` and validity mask ``(...)`` of camera-frame points ``(..., 3)``."""
+        points = _as_array(points, 3, "points")
+        x, y, z = np.moveaxis(points, -1, 0)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            norm = np.sqrt(x * x + y * y + z * z)
+            denominator = z + self.xi * norm  # |p| (s_z + xi)
+            mx, my = x / denominator, y / denominator
+            r2 = mx * mx + my * my
+            valid = np.isfinite(r2) & (z > -self._w * norm) & (r2 <= self.max_radius**2)
+            xd, yd, _ = self._distort(mx, my)
+            uv = np.stack([self.fx * xd + self.cx, self.fy * yd + self.cy], axis=-1)
+        uv[~valid] = np.nan
+        return uv, valid
+
+    def unproject(self, uv, iterations: int = 20) -> tuple[np.ndarray, np.ndarray]:
+        """Unit rays ``(..., 3)`` in the camera frame and validity mask ``(...)`` of pixels ``(..., 2)``."""
+        uv = _as_array(uv, 2, "pixels")
+        mx, my = self._undistort((uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy, iterations)
+        r2 = mx * mx + my * my
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            eta = (self.xi + np.sqrt(1.0 + (1.0 - self.xi * self.xi) * r2)) / (1.0 + r2)
+            rays = np.stack([eta * mx, eta * my, eta - self.xi], axis=-1)
+        valid = _round_trip_valid(self, rays, uv)
         rays[~valid] = np.nan
         return rays, valid
 

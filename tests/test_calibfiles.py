@@ -64,13 +64,17 @@ def test_kalibr_refuses_what_it_cannot_hold(tmp_path):
     with_k3 = Pinhole(fx=1.0, fy=1.0, cx=0.0, cy=0.0, dist=(0.0, 0.0, 0.0, 0.0, 0.1), width=4, height=4)
     with pytest.raises(ValueError, match="no k3"):
         save_kalibr(tmp_path / "x.yaml", {"cam0": with_k3})
-    path = tmp_path / "omni.yaml"
+    path = tmp_path / "ds.yaml"
     path.write_text(
         yaml.safe_dump(
-            {"cam0": {"camera_model": "omni", "intrinsics": [2.0, 800, 800, 640, 400], "resolution": [1280, 800]}}
+            {"cam0": {"camera_model": "ds", "intrinsics": [-0.2, 0.6, 350, 350, 640, 400], "resolution": [1280, 800]}}
         )
     )
-    with pytest.raises(ValueError, match=r"omni\.yaml, cam0: unsupported camera model 'omni'"):
+    with pytest.raises(ValueError, match=r"ds\.yaml, cam0: unsupported camera model 'ds'"):
+        load_kalibr(path)
+    equidistant = {"camera_model": "pinhole", "intrinsics": [300, 300, 320, 240], "distortion_model": "equidistant"}
+    path.write_text(yaml.safe_dump({"cam0": equidistant | {"distortion_coeffs": [0.1] * 4, "resolution": [640, 480]}}))
+    with pytest.raises(ValueError, match=r"unsupported camera model 'pinhole' with distortion 'equidistant'"):
         load_kalibr(path)
     path.write_text(yaml.safe_dump({"cam0": {"camera_model": "eucm", "intrinsics": [0.6, 1.1, 1, 1, 0, 0]}}))
     with pytest.raises(ValueError, match="missing the field 'resolution'"):
