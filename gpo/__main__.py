@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 from scipy.spatial.transform import Rotation
 
 from gpo.bag import Recording, describe
+from gpo.calibrate import main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
 from gpo.sim.record import GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, PRESETS, recording, simulate, write_sample_data
@@ -98,6 +99,12 @@ def main(argv: list[str] | None = None) -> int:
     sample_parser.add_argument("--out", type=Path, default=Path("data"), help="output folder (default: data)")
     recording_parser = commands.add_parser("recording", help="print the cached bag of a preset, making it if needed")
     recording_parser.add_argument("name", nargs="?", default="sample", choices=sorted(PRESETS))
+    calibrate_parser = commands.add_parser("calibrate", help="calibrate a camera from chessboard images")
+    calibrate_parser.add_argument("images", nargs="+", type=Path, help="image files of the board")
+    calibrate_parser.add_argument("--board", required=True, help="inner corners per row x per column, e.g. 7x5")
+    calibrate_parser.add_argument("--square", required=True, type=float, help="square size in metres")
+    calibrate_parser.add_argument("--model", default="eucm", choices=("eucm", "pinhole"))
+    calibrate_parser.add_argument("--out", type=Path, default=Path("calib.yaml"), help="Kalibr camchain to write")
     args = parser.parse_args(argv)
 
     try:
@@ -113,6 +120,9 @@ def main(argv: list[str] | None = None) -> int:
             print(describe(args.bag))
         elif args.command == "recording":
             print(recording(args.name))
+        elif args.command == "calibrate":
+            result = main_calibrate(args.images, args.board, args.square, args.model, args.out)
+            return 0 if result.ok else 1
         elif args.command == "sample-data":
             for path in write_sample_data(args.out):
                 print(f"wrote {path}")

@@ -146,3 +146,44 @@ def draw_paths(paths: dict, ax=None, styles: dict | None = None) -> plt.Axes:
     ax.set_ylabel("y [m]")
     ax.legend(fontsize="small")
     return ax
+
+
+def draw_residuals(result, ax=None, scale: float = 100.0) -> plt.Axes:
+    """Residual vectors of a ``gpo.calibrate.CalibrationResult`` over its image, magnified ``scale`` times."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 6.0))
+    corners = np.concatenate([result.corners[i] for i in result.used])
+    residuals = np.concatenate([result.residuals[i] for i in result.used])
+    ax.quiver(
+        corners[:, 0],
+        corners[:, 1],
+        residuals[:, 0],
+        residuals[:, 1],
+        angles="xy",
+        scale_units="xy",
+        scale=1.0 / scale,
+        width=0.003,
+        color="tab:red",
+    )
+    ax.plot(corners[:, 0], corners[:, 1], ".", ms=1.5, color="0.4")
+    ax.set_xlim(-0.5, result.camera.width - 0.5)
+    ax.set_ylim(result.camera.height - 0.5, -0.5)
+    ax.set_aspect("equal")
+    ax.set_xlabel("u [px]")
+    ax.set_ylabel("v [px]")
+    ax.set_title(f"{result.model}: residuals x{scale:.0f}, RMS {result.rms_px:.3f} px")
+    return ax
+
+
+def draw_view_errors(result, ax=None) -> plt.Axes:
+    """RMS reprojection error of every view of a ``CalibrationResult``; views left out are marked."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 3))
+    views = sorted(result.view_rms_px)
+    colours = ["tab:blue" if i in result.used else "tab:gray" for i in views]
+    ax.bar([str(i) for i in views], [result.view_rms_px[i] for i in views], color=colours)
+    for i in sorted(result.dropped):
+        ax.annotate("left out", (str(i), 0), rotation=90, ha="center", va="bottom", fontsize="x-small")
+    ax.set_xlabel("view")
+    ax.set_ylabel("RMS [px]")
+    return ax
