@@ -148,10 +148,13 @@ def draw_paths(paths: dict, ax=None, styles: dict | None = None) -> plt.Axes:
     return ax
 
 
-def draw_residuals(result, ax=None, scale: float = 100.0) -> plt.Axes:
-    """Residual vectors of a ``gpo.calibrate.CalibrationResult`` over its image, magnified ``scale`` times."""
+def draw_residuals(result, ax=None, scale: float | None = None) -> plt.Axes:
+    """Residual vectors of a ``gpo.calibrate.CalibrationResult`` over its image, magnified ``scale`` times
+    (by default so that an RMS-sized residual is drawn 10 px long)."""
     if ax is None:
         _, ax = plt.subplots(figsize=(6.4, 6.0))
+    if scale is None:
+        scale = float(10 ** np.round(np.log10(10.0 / max(result.rms_px, 1e-6))))
     corners = np.concatenate([result.corners[i] for i in result.used])
     residuals = np.concatenate([result.residuals[i] for i in result.used])
     ax.quiver(

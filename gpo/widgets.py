@@ -9,8 +9,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gpo.bag import Recording
+from gpo.calibrate import CalibrationError, calibrate_corners
 from gpo.camera import EUCM, T265_LIKE
-from gpo.plots import draw_room_in_image, field_of_view_text
+from gpo.plots import draw_residuals, draw_room_in_image, draw_view_errors, field_of_view_text
 
 
 def _slider(description: str, value: float, low: float, high: float, step: float) -> widgets.FloatSlider:
@@ -83,3 +84,31 @@ def recording_browser(path, topic: str | None = None, ground_truth_topic: str = 
         plt.show()
 
     return widgets.VBox([time, widgets.interactive_output(redraw, {"time_s": time})])
+
+
+def calibration_panel(corners: list, board, image_size: tuple[int, int]) -> widgets.VBox:
+    """Drop views and switch the model, then see the calibration again: residuals, per-view errors, summary.
+
+    ``corners``: one (N, 2) pixel array per view in the order of ``board.inner_corners()`` (as
+    ``CalibrationResult.corners`` holds them); ``image_size`` = (width, height) pixels.
+    """
+    names = [f"view {index}" for index in range(len(corners))]
+    model = widgets.ToggleButtons(options=["eucm", "pinhole"], value="eucm", description="model")
+    dropped = widgets.SelectMultiple(options=names, rows=6, description="drop views")
+
+    def redraw(model: str, dropped: tuple[str, ...]) -> None:
+        kept = [None if name in dropped else view for name, view in zip(names, corners, strict=True)]
+        plt.close("all")
+        try:
+            result = calibrate_corners(kept, board, image_size, model)
+        except CalibrationError as error:
+            print(f"no calibration: {error}")
+            return
+        _, (left, right) = plt.subplots(1, 2, figsize=(12, 4.6), gridspec_kw={"width_ratios": [1, 1.3]})
+        draw_residuals(result, ax=left)
+        draw_view_errors(result, ax=right)
+        print(result.summary())
+        plt.show()
+
+    output = widgets.interactive_output(redraw, {"model": model, "dropped": dropped})
+    return widgets.VBox([widgets.HBox([model, dropped]), output])
