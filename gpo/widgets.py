@@ -11,6 +11,7 @@ import numpy as np
 from gpo.bag import Recording
 from gpo.calibrate import CalibrationError, calibrate_corners
 from gpo.camera import EUCM, T265_LIKE
+from gpo.cubemap import Cubemap, default_face_size
 from gpo.plots import draw_residuals, draw_room_in_image, draw_view_errors, field_of_view_text
 
 
@@ -112,3 +113,26 @@ def calibration_panel(corners: list, board, image_size: tuple[int, int]) -> widg
 
     output = widgets.interactive_output(redraw, {"model": model, "dropped": dropped})
     return widgets.VBox([widgets.HBox([model, dropped]), output])
+
+
+def cubemap_panel(fisheye_image, camera: EUCM) -> widgets.VBox:
+    """A face-size slider over the cubemap of ``fisheye_image``: the cross of the five faces, redrawn on release.
+
+    The default face size (``gpo.cubemap.default_face_size``) keeps the fisheye's pixel density at the
+    front face's centre; smaller faces throw detail away, larger ones only interpolate.
+    """
+    default = default_face_size(camera)
+    size = widgets.IntSlider(
+        value=default, min=64, max=2 * default, step=2, description="face [px]", continuous_update=False
+    )
+
+    def redraw(face_size: int) -> None:
+        cubemap = Cubemap(camera, face_size)
+        plt.close("all")
+        _, ax = plt.subplots(figsize=(7, 7))
+        ax.imshow(cubemap.cross(fisheye_image), cmap="gray", vmin=0, vmax=255)
+        ax.set_title(f"five faces of {face_size} x {face_size} px, f = {face_size / 2:.0f} px")
+        ax.axis("off")
+        plt.show()
+
+    return widgets.VBox([size, widgets.interactive_output(redraw, {"face_size": size})])
