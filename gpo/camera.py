@@ -57,6 +57,15 @@ def _check_positive(name: str, value: float) -> float:
     return value
 
 
+def _check_intrinsics(camera) -> None:
+    """Check what every model shares: the image size, focal lengths and principal point."""
+    _check_image_size(camera)
+    _check_positive("fx", camera.fx)
+    _check_positive("fy", camera.fy)
+    _check_finite("cx", camera.cx)
+    _check_finite("cy", camera.cy)
+
+
 def _check_image_size(camera) -> None:
     """Check ``camera.width`` and ``camera.height`` and store them as int."""
     for name in ("width", "height"):
@@ -75,6 +84,8 @@ class _Camera:
 
     width: int
     height: int
+    cx: float
+    cy: float
 
     def in_image(self, uv) -> np.ndarray:
         """True where pixel coordinates ``uv (..., 2)`` fall inside the image.
@@ -113,7 +124,8 @@ class _Camera:
 
     @property
     def principal_point(self) -> tuple[float, float]:
-        raise NotImplementedError
+        """(cx, cy) in pixels."""
+        return self.cx, self.cy
 
     def unproject(self, uv) -> tuple[np.ndarray, np.ndarray]:
         raise NotImplementedError
@@ -153,11 +165,7 @@ class EUCM(_Camera):
     height: int
 
     def __post_init__(self):
-        _check_image_size(self)
-        _check_positive("fx", self.fx)
-        _check_positive("fy", self.fy)
-        _check_finite("cx", self.cx)
-        _check_finite("cy", self.cy)
+        _check_intrinsics(self)
         if not 0.0 <= _check_finite("alpha", self.alpha) <= 1.0:
             raise ValueError(f"alpha must lie in [0, 1], got {self.alpha}")
         _check_positive("beta", self.beta)
@@ -174,10 +182,6 @@ class EUCM(_Camera):
     def params(self) -> np.ndarray:
         """The parameter vector (fx, fy, cx, cy, alpha, beta)."""
         return np.array([self.fx, self.fy, self.cx, self.cy, self.alpha, self.beta])
-
-    @property
-    def principal_point(self) -> tuple[float, float]:
-        return self.cx, self.cy
 
     @property
     def _w(self) -> float:
@@ -365,17 +369,9 @@ class Pinhole(_RadialTangential, _Camera):
     height: int
 
     def __post_init__(self):
-        _check_image_size(self)
-        _check_positive("fx", self.fx)
-        _check_positive("fy", self.fy)
-        _check_finite("cx", self.cx)
-        _check_finite("cy", self.cy)
+        _check_intrinsics(self)
         dist = _check_radtan(self.dist, (4, 5))
         object.__setattr__(self, "dist", (*dist, 0.0)[:5])  # always (k1, k2, p1, p2, k3)
-
-    @property
-    def principal_point(self) -> tuple[float, float]:
-        return self.cx, self.cy
 
     @property
     def camera_matrix(self) -> np.ndarray:
@@ -463,18 +459,10 @@ class Omni(_RadialTangential, _Camera):
     height: int
 
     def __post_init__(self):
-        _check_image_size(self)
-        _check_positive("fx", self.fx)
-        _check_positive("fy", self.fy)
-        _check_finite("cx", self.cx)
-        _check_finite("cy", self.cy)
+        _check_intrinsics(self)
         if _check_finite("xi", self.xi) < 0:
             raise ValueError(f"xi must be >= 0, got {self.xi}")
         object.__setattr__(self, "dist", _check_radtan(self.dist, (4,)))
-
-    @property
-    def principal_point(self) -> tuple[float, float]:
-        return self.cx, self.cy
 
     @property
     def _w(self) -> float:
