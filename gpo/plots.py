@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.transforms import Affine2D
 
 from gpo.camera import EUCM, Pinhole
 from gpo.rig import Rig, floor_points, rays_in_base
@@ -189,4 +190,40 @@ def draw_view_errors(result, ax=None) -> plt.Axes:
         ax.annotate("left out", (str(i), 0), rotation=90, ha="center", va="bottom", fontsize="x-small")
     ax.set_xlabel("view")
     ax.set_ylabel("RMS [px]")
+    return ax
+
+
+def draw_floor_image(image, floor, ax=None, mount=None, axes_length: float = 0.1) -> plt.Axes:
+    """A floor image (``gpo.ground.FloorImage`` ``floor``) drawn where it lies in ``base_link``, seen from above.
+
+    Forward (+x) is up and left (+y) to the left, in metres; every pixel is put where ``floor.affine`` puts it, so
+    a GPI, an ortho-GPI and an analytic image line up on the same axes. base_link's origin is drawn with its x
+    and y axes ``axes_length`` metres long, and the camera at ``mount.position`` (a ``CameraMount``) when given.
+    """
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 6))
+    affine = floor.affine
+    # pixel (u, v) -> plot (horizontal, vertical) = (y, x) in base_link: the affine map's rows swapped
+    to_plot = Affine2D(np.vstack([affine[1], affine[0], [0.0, 0.0, 1.0]]))
+    pixels = (-0.5, floor.width - 0.5, floor.height - 0.5, -0.5)
+    artist = ax.imshow(image, cmap="gray", vmin=0, vmax=255, extent=pixels, interpolation="nearest")
+    artist.set_transform(to_plot + ax.transData)
+    ax.annotate("", (0.0, axes_length), (0.0, 0.0), arrowprops={"arrowstyle": "->", "color": "tab:red", "lw": 2})
+    ax.annotate("", (axes_length, 0.0), (0.0, 0.0), arrowprops={"arrowstyle": "->", "color": "tab:green", "lw": 2})
+    ax.text(0.0, 1.1 * axes_length, "x", color="tab:red", ha="center", va="bottom")
+    ax.text(1.1 * axes_length, 0.0, "y", color="tab:green", ha="right", va="center")
+    ax.text(0.0, -0.2 * axes_length, "base_link", ha="center", va="top", fontsize="small")
+    x_min, x_max, y_min, y_max = floor.extent
+    points = [(y_min, x_min), (y_max, x_max), (-0.3 * axes_length, -0.5 * axes_length), (1.3 * axes_length, 0.0)]
+    if mount is not None:
+        ax.plot(mount.position[1], mount.position[0], "^", ms=9, color="tab:orange")
+        ax.annotate("camera", (mount.position[1], mount.position[0]), (8, -4), textcoords="offset points")
+        points.append((mount.position[1], mount.position[0]))
+    horizontal, vertical = np.array(points).T
+    margin = 0.05 * max(np.ptp(horizontal), np.ptp(vertical))
+    ax.set_xlim(horizontal.max() + margin, horizontal.min() - margin)  # y grows to the left
+    ax.set_ylim(vertical.min() - margin, vertical.max() + margin)
+    ax.set_aspect("equal")
+    ax.set_xlabel("y, left [m]")
+    ax.set_ylabel("x, forward [m]")
     return ax

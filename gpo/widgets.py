@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import ipywidgets as widgets
 import matplotlib.pyplot as plt
@@ -12,7 +13,18 @@ from gpo.bag import Recording
 from gpo.calibrate import CalibrationError, calibrate_corners
 from gpo.camera import EUCM, T265_LIKE
 from gpo.cubemap import Cubemap, default_face_size
-from gpo.plots import draw_residuals, draw_room_in_image, draw_view_errors, field_of_view_text
+from gpo.ground import (
+    FloorImage,
+    GroundImageError,
+    analytic_table,
+    front_face_corners,
+    ground_plane_image,
+    ortho_rectify,
+    route_difference,
+)
+from gpo.mount import floor_angles
+from gpo.plots import draw_floor_image, draw_residuals, draw_room_in_image, draw_view_errors, field_of_view_text
+from gpo.rig import CameraMount
 
 
 def _slider(description: str, value: float, low: float, high: float, step: float) -> widgets.FloatSlider:
@@ -136,3 +148,180 @@ def cubemap_panel(fisheye_image, camera: EUCM) -> widgets.VBox:
         plt.show()
 
     return widgets.VBox([size, widgets.interactive_output(redraw, {"face_size": size})])
+
+
+GPI_CORNER_NAMES = ("near-right", "far-right", "far-left", "near-left")
+"""The four corners of eq. 22 in the order of ``gpo.ground.front_face_corners``."""
+MAX_PANEL_PIXELS = 2_000_000  # floor images larger than this are not redrawn by a panel: too slow to be interactive
+
+
+def gpi_corners_panel(fisheye_image, camera, placement, mount=None) -> widgets.VBox:
+    """Move the four corners of eq. 22 by hand in the front face and see the GPI they give, redrawn on release.
+
+    The sliders (front-face pixels) start at the corners found automatically (``gpo.ground.front_face_corners``
+    for the board lying at ``placement``). Left: the front face with the corners found (circles) and those used
+    (the outline); right: the GPI made the paper's way. With ``mount``, the camera's true mount (the simulator
+    knows it), it also prints how far the GPI's front-face part puts the floor from where it truly is.
+    """
+    cubemap = Cubemap(camera)
+    found = front_face_corners(fisheye_image, cubemap, placement)
+    front = cubemap.face_image(fisheye_image, "front")
+    controls = {}
+    for index, (name, (u, v)) in enumerate(zip(GPI_CORNER_NAMES, found, strict=True)):
+        controls[f"u{index}"] = _slider(f"{name} u", float(u), round(u) - 20.0, round(u) + 20.0, 0.1)
+        controls[f"v{index}"] = _slider(f"{name} v", float(v), round(v) - 20.0, round(v) + 20.0, 0.1)
+
+    def redraw(**values: float) -> None:
+        corners = np.array([[values[f"u{index}"], values[f"v{index}"]] for index in range(4)])
+        plt.close("all")
+        try:
+            gpi = ground_plane_image(fisheye_image, camera, placement, corners=corners, cache=False)
+        except GroundImageError as error:
+            print(f"no GPI: {error}")
+            return
+        _, (left, right) = plt.subplots(1, 2, figsize=(11, 5.5))
+        left.imshow(front, cmap="gray", vmin=0, vmax=255)
+        left.plot(*found.T, "o", mfc="none", color="tab:blue", label="found")
+        left.plot(*np.vstack([corners, corners[:1]]).T, "-", color="tab:red", lw=1, label="used")
+        (u_min, v_min), (u_max, v_max) = corners.min(axis=0) - 60, corners.max(axis=0) + 60
+        left.set(xlim=(u_min, u_max), ylim=(v_max, v_min), title="front face (zoomed on the board)")
+        left.legend(fontsize="small")
+        right.imshow(gpi.staged(fisheye_image), cmap="gray", vmin=0, vmax=255)
+        right.axhline(gpi.front_rows - 0.5, color="tab:orange", lw=0.8)
+        right.set_title("GPI: warped front face above, bottom face below")
+        moved = np.linalg.norm(corners - found, axis=1).max()
+        print(f"corners up to {moved:.1f} px from those found; GPI {gpi.size[0]} x {gpi.size[1]} px")
+        if mount is not None:
+            truth = analytic_table(camera, mount, gpi.floor, max_outside=1.0, cache=False)
+            error_mm = route_difference(gpi.table, truth).floor_mm[: gpi.front_rows]
+            mean, worst = np.nanmean(error_mm), np.nanmax(error_mm)
+            print(f"front-face part against the truth: mean {mean:.1f} mm, worst {worst:.1f} mm")
+        plt.show()
+
+    rows = [widgets.HBox([controls[f"u{index}"], controls[f"v{index}"]]) for index in range(4)]
+    return widgets.VBox([*rows, widgets.interactive_output(redraw, controls)])
+
+
+def gpi_extent_panel(fisheye_image, camera, placement, mount=None) -> widgets.VBox:
+    """How far ahead the GPI reaches (``ahead_m``) and how many bottom-face rows it keeps, redrawn on release.
+
+    The corners are found once (``front_face_corners``). Left: the GPI, the seam marked; right: where it lies in
+    base_link (``gpo.plots.draw_floor_image``; the camera marked at ``mount`` when given). Too far ahead, the front
+    face resolves the floor no more, and the panel prints the package's error, which says what fits.
+    """
+    corners = front_face_corners(fisheye_image, Cubemap(camera), placement)
+    default = ground_plane_image(fisheye_image, camera, placement, corners=corners, cache=False)
+    ahead = _slider("ahead [m]", 0.30, 0.05, 1.00, 0.01)
+    rows = widgets.IntSlider(
+        value=default.bottom_rows,
+        min=1,
+        max=default.cubemap.face_size,
+        description="bottom rows",
+        continuous_update=False,
+        style={"description_width": "initial"},
+    )
+
+    def redraw(ahead_m: float, bottom_rows: int) -> None:
+        plt.close("all")
+        try:
+            gpi = ground_plane_image(
+                fisheye_image, camera, placement, corners, ahead_m=ahead_m, bottom_rows=bottom_rows, cache=False
+            )
+        except GroundImageError as error:
+            print(f"no GPI: {error}")
+            return
+        image = gpi.staged(fisheye_image)
+        _, (left, right) = plt.subplots(1, 2, figsize=(11, 5.5))
+        left.imshow(image, cmap="gray", vmin=0, vmax=255)
+        left.axhline(gpi.front_rows - 0.5, color="tab:orange", lw=0.8)
+        left.set_title(f"GPI {gpi.size[0]} x {gpi.size[1]} px: {gpi.front_rows} rows of front face above the seam")
+        draw_floor_image(image, gpi.floor, ax=right, mount=mount)
+        x_min, x_max, y_min, y_max = gpi.floor.extent
+        print(
+            f"the GPI covers x {x_min:.3f}..{x_max:.3f} m, y {y_min:.3f}..{y_max:.3f} m of base_link at about "
+            f"{gpi.floor.metres_per_pixel * 1e3:.2f} mm per pixel (nominal: the plain GPI is not exactly metric)"
+        )
+        plt.show()
+
+    output = widgets.interactive_output(redraw, {"ahead_m": ahead, "bottom_rows": rows})
+    return widgets.VBox([widgets.HBox([ahead, rows]), output])
+
+
+def ortho_extent_panel(fisheye_image, camera, placement, mount=None) -> widgets.VBox:
+    """The ortho-GPI's extent (near and far x, half width in y, metres in base_link) and millimetres per pixel.
+
+    The GPI and the board's block in it are found once; each release fits the second homography to the new
+    ``FloorImage.top_view`` and redraws the ortho-GPI, left in its pixels and right where it lies in base_link.
+    An extent the GPI does not show prints the package's error with one that fits; floor images of more than
+    ``MAX_PANEL_PIXELS`` pixels are not drawn.
+    """
+    gpi = ground_plane_image(fisheye_image, camera, placement, cache=False)
+    gpi_image = gpi.table.apply(fisheye_image)
+    controls = {
+        "near": _slider("near x [m]", 0.70, 0.55, 1.00, 0.01),
+        "far": _slider("far x [m]", 0.90, 0.60, 1.10, 0.01),
+        "half_width": _slider("half width [m]", 0.10, 0.02, 0.30, 0.01),
+        "millimetres": _slider("mm per pixel", 0.50, 0.20, 2.00, 0.05),
+    }
+
+    def redraw(near: float, far: float, half_width: float, millimetres: float) -> None:
+        plt.close("all")
+        try:
+            floor = FloorImage.top_view((near, far), (-half_width, half_width), millimetres * 1e-3)
+            if floor.width * floor.height > MAX_PANEL_PIXELS:
+                print(f"{floor.width} x {floor.height} px is too many to redraw here: more mm per pixel or less floor")
+                return
+            ortho = ortho_rectify(gpi, gpi_image, placement, floor)
+        except GroundImageError as error:
+            print(f"no ortho-GPI: {error}")
+            return
+        image = ortho.table.apply(fisheye_image)
+        _, (left, right) = plt.subplots(1, 2, figsize=(11, 5.5))
+        left.imshow(image, cmap="gray", vmin=0, vmax=255)
+        left.set_title(f"ortho-GPI {floor.width} x {floor.height} px, {millimetres:.2f} mm per pixel")
+        draw_floor_image(image, floor, ax=right, mount=mount)
+        approximate = ortho.through_bottom_face().mean()
+        print(f"{approximate:.0%} of it is seen through the GPI's bottom-face rows (only approximately metric there)")
+        plt.show()
+
+    sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
+    return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+def analytic_mount_panel(fisheye_image, camera, mount: CameraMount, reference, placement=None) -> widgets.VBox:
+    """The analytic route's camera height, pitch and roll: its floor image redrawn on release, and how far it lies
+    from ``reference`` (a ``RemapTable``, e.g. the chessboard route's ortho-GPI), in millimetres on the floor.
+
+    The sliders start at ``mount``'s values (a forward mount, no yaw: ``CameraMount.forward`` at the mount's x and
+    y); the image covers ``reference.floor``. With ``placement``, the board's true inner corners are marked: a
+    wrong height scales the image about the point below the camera, a wrong pitch stretches it, a wrong roll skews it.
+    """
+    pitch, roll = floor_angles(mount.rotation.inv().apply([0.0, 0.0, 1.0]))
+    x, y = mount.position[:2]
+    height_mm = 1e3 * mount.height
+    controls = {
+        "height_mm": _slider("height [mm]", height_mm, 0.5 * height_mm, 1.5 * height_mm, 0.5),
+        "pitch_deg": _slider("pitch [deg]", math.degrees(pitch), -5.0, 25.0, 0.1),
+        "roll_deg": _slider("roll [deg]", math.degrees(roll), -10.0, 10.0, 0.1),
+    }
+    floor = reference.floor
+
+    def redraw(height_mm: float, pitch_deg: float, roll_deg: float) -> None:
+        guess = CameraMount.forward(x, y, height_mm * 1e-3, math.radians(pitch_deg), math.radians(roll_deg))
+        table = analytic_table(camera, guess, floor, max_outside=1.0, cache=False)
+        difference = route_difference(reference, table)
+        plt.close("all")
+        _, ax = plt.subplots(figsize=(6, 6))
+        ax.imshow(table.apply(fisheye_image), cmap="gray", vmin=0, vmax=255)
+        if placement is not None:
+            ax.plot(*floor.base_to_pixel(placement.corners_world()[:, :2]).T, "+", color="tab:red", ms=6)
+        ax.set_title(f"analytic: height {height_mm:.1f} mm, pitch {pitch_deg:.1f} deg, roll {roll_deg:.1f} deg")
+        ax.axis("off")
+        print(
+            f"from the reference: mean {difference.mean_mm:.2f} mm, worst {difference.max_mm:.2f} mm on the floor "
+            f"({difference.mean_px:.2f} px, {difference.max_px:.2f} px in the fisheye); {table.outside_fraction:.0%} "
+            "of the image not seen"
+        )
+        plt.show()
+
+    return widgets.VBox([widgets.HBox(list(controls.values())), widgets.interactive_output(redraw, controls)])
