@@ -1,0 +1,254 @@
+"""How the floor image moves from frame to frame: Shi-Tomasi corners, pyramidal Lucas-Kanade, the median vector.
+
+Chapter 05. ``FloorFlow`` keeps a set of tracked corners on the floor image (the ortho-GPI, a metric top view,
+``gpo.ground``) and re-detects them (``cv2.goodFeaturesToTrack``) when too few are left. For each new frame it
+tracks them with pyramidal Lucas-Kanade (``cv2.calcOpticalFlowPyrLK``), each search starting where the previous
+frame's median motion predicts, so that the pyramid has to find only the change of motion, not the motion. Then
+it tracks the results back to the previous frame from the same prediction and keeps the tracks that return to
+where they started (the forward-backward check). Once the motion is known (the previous frame was measured), the
+backward search runs on the full-resolution image only: a right track is then a few pixels from its start.
+The kept tracks' vectors give the frame's **median** motion vector, robust to the outliers that moving objects
+and highlights make, and the mean, for the first paper's comparison (its Table 3).
+
+Each frame gets a ``FlowQuality``; a frame that cannot be measured is flagged with the reason, never turned into
+a wrong vector: too few corners (a floor without texture), too few tracks kept (a bad frame, motion blur),
+vectors that disagree (no consensus), or a motion near the pyramid's reach.
+
+Pixels (u, v): u right, v down, as OpenCV.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
+
+
+class FlowError(ValueError):
+    """A floor image the tracker cannot use (wrong type, wrong size)."""
+
+
+@dataclass(frozen=True)
+class KLTParameters:
+    """Corner detection and Lucas-Kanade tracking on a floor image.
+
+    ``max_corners``, ``quality_level`` and ``min_distance_px``, ``block_size``: ``cv2.goodFeaturesToTrack``.
+    ``window_px`` (odd) and ``pyramid_levels``: ``cv2.calcOpticalFlowPyrLK``'s window and pyramid; the pyramid
+    reaches a motion of about ``window_px / 2 * 2**pyramid_levels`` pixels. ``max_iterations`` and ``epsilon_px``:
+    its stopping rule. ``forward_backward_px``: a track is kept when tracking it back ends this close to where it
+    started. ``redetect_below``: fewer tracks than this left, corners are detected afresh. ``min_tracks``: fewer
+    kept than this, the frame is flagged. ``inlier_px``: a vector is an inlier when it lies this close to the
+    median, or within three robust sigmas of it if they are wider. ``min_inlier_ratio``: below it the frame
+    is flagged (no consensus).
+    """
+
+    max_corners: int = 150
+    quality_level: float = 0.01
+    min_distance_px: float = 8.0
+    block_size: int = 7
+    window_px: int = 21
+    pyramid_levels: int = 3
+    max_iterations: int = 20
+    epsilon_px: float = 0.03
+    forward_backward_px: float = 0.5
+    redetect_below: int = 60
+    min_tracks: int = 12
+    inlier_px: float = 1.0
+    min_inlier_ratio: float = 0.5
+
+    def __post_init__(self):
+        checks = {
+            "max_corners": self.max_corners >= 1,
+            "quality_level": 0 < self.quality_level < 1,
+            "min_distance_px": self.min_distance_px >= 0,
+            "block_size": self.block_size >= 3,
+            "window_px": self.window_px >= 5 and self.window_px % 2 == 1,
+            "pyramid_levels": 0 <= self.pyramid_levels <= 8,
+            "max_iterations": self.max_iterations >= 1,
+            "epsilon_px": self.epsilon_px > 0,
+            "forward_backward_px": self.forward_backward_px > 0,
+            "redetect_below": self.redetect_below >= 0,
+            "min_tracks": self.min_tracks >= 2,
+            "inlier_px": self.inlier_px > 0,
+            "min_inlier_ratio": 0 <= self.min_inlier_ratio <= 1,
+        }
+        bad = [name for name, ok in checks.items() if not ok]
+        if bad:
+            values = ", ".join(f"{name}={getattr(self, name)!r}" for name in bad)
+            raise ValueError(f"bad KLT parameters: {values} (see KLTParameters for the allowed ranges)")
+
+    @property
+    def reach_px(self) -> float:
+        """The largest motion the pyramid can follow, about half a window at the coarsest level, pixels."""
+        return self.window_px / 2 * 2**self.pyramid_levels
+
+
+@dataclass(frozen=True)
+class FlowQuality:
+    """How well a frame's motion was measured.
+
+    ``tracked``: tracks followed from the previous frame; ``kept``: those passing the forward-backward check;
+    ``inliers``: kept vectors near the median; ``spread_px``: their robust standard deviation (1.4826 MAD),
+    pixels; ``flag``: None when the frame is measured, else why it is not.
+    """
+
+    tracked: int
+    kept: int
+    inliers: int
+    spread_px: float
+    flag: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.flag is None
+
+    @property
+    def inlier_ratio(self) -> float:
+        return self.inliers / self.kept if self.kept else 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class FlowMeasurement:
+    """One frame's floor motion: kept tracks from ``start`` (N, 2) to ``end`` (N, 2) pixels, their ``median`` and
+    ``mean`` vectors (2,) pixels (NaN when flagged), the ``inlier`` mask (N,) and the ``quality``."""
+
+    start: np.ndarray
+    end: np.ndarray
+    median: np.ndarray
+    mean: np.ndarray
+    inlier: np.ndarray
+    quality: FlowQuality
+
+    @property
+    def vectors(self) -> np.ndarray:
+        """The kept tracks' motion vectors (N, 2), pixels."""
+        return self.end - self.start
+
+
+@dataclass
+class FloorFlow:
+    """Frame-to-frame KLT tracking on a stream of floor images of one size.
+
+    ``mask`` (H, W) bool or uint8, optional: where corners may be detected (the floor image's valid pixels);
+    it is shrunk by half a window so that no corner's window leaves it. Call ``track(image)`` once per
+    frame in order; the first frame only starts the tracks and returns None. ``restart()`` drops them (after a
+    gap, or a flagged frame that broke the chain).
+    """
+
+    parameters: KLTParameters = field(default_factory=KLTParameters)
+    mask: np.ndarray | None = None
+    _image: np.ndarray | None = field(default=None, init=False, repr=False)
+    _prediction: np.ndarray = field(default_factory=lambda: np.zeros(2, np.float32), init=False, repr=False)
+    _predicted: bool = field(default=False, init=False, repr=False)
+    _points: np.ndarray | None = field(default=None, init=False, repr=False)
+    _detect_mask: np.ndarray | None = field(default=None, init=False, repr=False)
+    _size: tuple[int, int] | None = field(default=None, init=False, repr=False)
+
+    def restart(self) -> None:
+        """Forget the previous frame: the next ``track`` call starts afresh."""
+        self._image, self._points = None, None
+        self._prediction, self._predicted = np.zeros(2, np.float32), False
+
+    def track(self, image: np.ndarray) -> FlowMeasurement | None:
+        """The motion from the previous frame to ``image`` (H, W) uint8; None for the first frame."""
+        self._check(image)
+        previous, points = self._image, self._points
+        self._image = image
+        if previous is None:
+            self._points = self._detect(image)
+            return None
+        if len(points) < self.parameters.redetect_below:
+            points = self._detect(previous)
+        measurement, surviving = self._measure(previous, image, points)
+        self._points = surviving
+        self._predicted = measurement.quality.ok
+        if measurement.quality.ok:
+            self._prediction = measurement.median.astype(np.float32)
+        return measurement
+
+    def _measure(self, previous, image, points) -> tuple[FlowMeasurement, np.ndarray]:
+        p = self.parameters
+        nothing = np.zeros((0, 2), np.float32)
+        if len(points) < p.min_tracks:
+            flag = f"too few corners ({len(points)} < {p.min_tracks}): no texture to track"
+            return _flagged(nothing, nothing, len(points), flag), points
+        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, p.max_iterations, p.epsilon_px)
+        window = (p.window_px, p.window_px)
+        start = points.reshape(-1, 1, 2)
+        lk = {"winSize": window, "maxLevel": p.pyramid_levels, "criteria": criteria}
+        lk["flags"] = cv2.OPTFLOW_USE_INITIAL_FLOW
+        end, status, _ = cv2.calcOpticalFlowPyrLK(previous, image, start, start + self._prediction, **lk)
+        if self._predicted:
+            lk["maxLevel"] = 0
+        back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, previous, end, end - self._prediction, **lk)
+        start, end, back = start.reshape(-1, 2), end.reshape(-1, 2), back.reshape(-1, 2)
+        keep = (status.ravel() == 1) & (back_status.ravel() == 1)
+        keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2
+        keep &= self._inside(end)
+        start, end = start[keep], end[keep]
+        if len(start) < p.min_tracks:
+            flag = f"too few tracks kept ({len(start)} of {len(points)} < {p.min_tracks}): a bad or blurred frame"
+            return _flagged(start, end, len(points), flag), end
+        vectors = end - start
+        median = np.median(vectors, axis=0)
+        distance = np.hypot(*(vectors - median).T)
+        spread = MAD_TO_SIGMA * float(np.median(distance))
+        inlier = distance <= max(p.inlier_px, 3.0 * spread)
+        quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread)
+        flag = None
+        if quality.inlier_ratio < p.min_inlier_ratio:
+            flag = f"no consensus: {quality.inliers} of {quality.kept} vectors near the median"
+        elif np.hypot(*median) > 0.8 * p.reach_px:
+            flag = f"motion {np.hypot(*median):.0f} px near the pyramid's reach {p.reach_px:.0f} px: too fast"
+        if flag:
+            return _flagged(start, end, len(points), flag, inlier, spread), end
+        measurement = FlowMeasurement(start, end, median, vectors.mean(axis=0), inlier, quality)
+        return measurement, end
+
+    def _check(self, image: np.ndarray) -> None:
+        if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 2:
+            raise FlowError(f"a floor image is a 2-D uint8 array, got {getattr(image, 'dtype', type(image))}")
+        size = image.shape[::-1]
+        if self._size is None:
+            self._size = size
+            self._detect_mask = self._shrunk_mask(image.shape)
+        elif size != self._size:
+            raise FlowError(f"floor image size changed from {self._size} to {size} (width, height)")
+
+    def _shrunk_mask(self, shape) -> np.ndarray:
+        """Where a corner's whole window lies inside the mask and the image."""
+        inside = np.zeros(shape, np.uint8)
+        if self.mask is None:
+            inside[:] = 255
+        else:
+            if self.mask.shape != shape:
+                raise FlowError(f"mask shape {self.mask.shape} differs from the floor image's {shape}")
+            inside[self.mask.astype(bool)] = 255
+        half = self.parameters.window_px // 2 + 1
+        inside[:half], inside[-half:], inside[:, :half], inside[:, -half:] = 0, 0, 0, 0
+        return cv2.erode(inside, np.ones((2 * half + 1, 2 * half + 1), np.uint8))
+
+    def _detect(self, image: np.ndarray) -> np.ndarray:
+        p = self.parameters
+        corners = cv2.goodFeaturesToTrack(
+            image, p.max_corners, p.quality_level, p.min_distance_px, mask=self._detect_mask, blockSize=p.block_size
+        )
+        return np.zeros((0, 2), np.float32) if corners is None else corners.reshape(-1, 2)
+
+    def _inside(self, points: np.ndarray) -> np.ndarray:
+        """Tracks whose end still has its window inside the image (the mask's shrunk region at the rounded pixel)."""
+        width, height = self._size
+        u, v = np.rint(points[:, 0]).astype(int), np.rint(points[:, 1]).astype(int)
+        inside = (u >= 0) & (u < width) & (v >= 0) & (v < height)
+        inside[inside] = self._detect_mask[v[inside], u[inside]] > 0
+        return inside
+
+
+def _flagged(start, end, tracked: int, flag: str, inlier=None, spread: float = float("nan")) -> FlowMeasurement:
+    nan = np.full(2, np.nan)
+    inlier = np.zeros(len(start), bool) if inlier is None else inlier
+    quality = FlowQuality(tracked, len(start), int(inlier.sum()), spread, flag)
+    return FlowMeasurement(start, end, nan, nan, inlier, quality)

@@ -1,0 +1,349 @@
+"""A config in, a trajectory out: the one place where the stages meet.
+
+``run(bag, config)`` streams a recording's camera frames through the floor image's one remap table
+(``gpo.ground``), the frame-to-frame floor flow (``gpo.flow``) and a motion estimator (``gpo.kinematics``), and
+integrates the pose of ``base_link`` in ``odom`` (the pose at the first frame is the origin). The estimators
+(``METHODS``):
+
+- ``gpo``: the first paper's Ground Plane Odometry: the median motion vector read as the motion of a virtual
+  front wheel a wheelbase L ahead of the rear axle, through the paper's bicycle model (eqs. 25-34, Euler step);
+- ``gpo-exact``: the same vector turned into the exact circular arc of a rigid robot that does not slide at its
+  rear axle (reverse driving and turning on the spot included);
+- ``gpo-rigid``: no kinematic model: the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
+  frame's increment.
+
+Every frame gets a ``FrameRecord``. A frame that cannot be measured is flagged with the reason and the robot
+**coasts** across it at the last measured velocity, for at most ``max_gap_s``; beyond that it is held still.
+Frames whose stamp repeats or goes backwards are skipped; a gap longer than ``max_gap_s`` between frames is
+flagged, the pose held across it and tracking restarted after it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import Counter
+from dataclasses import dataclass, field, fields
+from importlib import resources
+from pathlib import Path
+
+import cv2
+import numpy as np
+import yaml
+
+from gpo.bag import Recording
+from gpo.config import load_rig, rig_to_dict
+from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
+from gpo.ground import FloorImage, analytic_table
+from gpo.kinematics import PaperBicycle, compose, increment_from_point_motion, increment_from_point_pairs
+from gpo.rig import Rig
+from gpo.trajectory import Trajectory
+
+METHODS = ("gpo", "gpo-exact", "gpo-rigid")
+VECTORS = ("median", "mean")
+RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
+DEFAULT_CONFIG = "sim_t265.yaml"
+
+
+@dataclass(frozen=True, eq=False)
+class OdometryConfig:
+    """Everything a run needs: the ``rig``, the ``floor`` image, the KLT ``klt`` parameters, the paper's bicycle
+    ``model``, the ``method`` (one of ``METHODS``), the ``vector`` statistic (median or mean; for ``gpo`` and
+    ``gpo-exact``) and ``max_gap_s``, the longest time the robot coasts or a frame gap is bridged, seconds."""
+
+    rig: Rig
+    floor: FloorImage
+    klt: KLTParameters = field(default_factory=KLTParameters)
+    model: PaperBicycle | None = None
+    method: str = "gpo-exact"
+    vector: str = "median"
+    max_gap_s: float = 0.5
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"unknown method {self.method!r}; the methods are {', '.join(METHODS)}")
+        if self.vector not in VECTORS:
+            raise ValueError(f"unknown vector {self.vector!r}; use {' or '.join(VECTORS)}")
+        if not self.max_gap_s > 0:
+            raise ValueError(f"max_gap_s must be positive, got {self.max_gap_s!r}")
+        if self.model is None:
+            centre = float(np.mean(self.floor.extent[:2]))
+            object.__setattr__(self, "model", PaperBicycle(centre, centre))
+
+    def replace(self, **changes) -> OdometryConfig:
+        """A copy with ``changes`` (any field, e.g. method="gpo")."""
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        return OdometryConfig(**{**values, **changes})
+
+
+def load_config(path=None) -> OdometryConfig:
+    """The run config of a rig config YAML (``gpo.config``) with the sections ``floor_image``, ``klt``,
+    ``kinematics`` and ``odometry``; None loads the shipped default for the simulated T265 rig."""
+    if path is None:
+        with resources.as_file(resources.files("gpo") / "configs" / DEFAULT_CONFIG) as default:
+            return load_config(default)
+    path = Path(path)
+    document = yaml.safe_load(path.read_text()) or {}
+    rig = load_rig(path)
+    floor = _floor_image(document.get("floor_image", {}), path)
+    klt = _dataclass_section(KLTParameters, document.get("klt", {}), path, "klt")
+    kinematics = document.get("kinematics")
+    model = None
+    if kinematics is not None:
+        model = PaperBicycle(float(kinematics["wheelbase_m"]), float(kinematics["rear_to_reference_m"]))
+    odometry = document.get("odometry", {})
+    try:
+        return OdometryConfig(rig, floor, klt, model, **odometry)
+    except TypeError as error:
+        raise ValueError(f"{path}: odometry: {error}; its keys are method, vector, max_gap_s") from None
+
+
+def config_to_dict(config: OdometryConfig) -> dict:
+    """The YAML document of ``config`` (``load_config`` reads it back)."""
+    x_min, x_max, y_min, y_max = config.floor.extent
+    return {
+        **rig_to_dict(config.rig),
+        "floor_image": {
+            "x_range_m": [round(x_min, 9), round(x_max, 9)],
+            "y_range_m": [round(y_min, 9), round(y_max, 9)],
+            "metres_per_pixel": round(config.floor.metres_per_pixel, 12),
+        },
+        "klt": {f.name: getattr(config.klt, f.name) for f in fields(config.klt)},
+        "kinematics": {
+            "wheelbase_m": config.model.wheelbase_m,
+            "rear_to_reference_m": config.model.rear_to_reference_m,
+        },
+        "odometry": {"method": config.method, "vector": config.vector, "max_gap_s": config.max_gap_s},
+    }
+
+
+def save_config(path, config: OdometryConfig) -> Path:
+    """Write ``config`` as YAML; return the path."""
+    path = Path(path)
+    header = "# gpo run config: the rig (camera, mount, topics), the floor image, KLT, the bicycle model, the method\n"
+    path.write_text(header + yaml.safe_dump(config_to_dict(config), sort_keys=False, default_flow_style=None))
+    return path
+
+
+def _floor_image(section: dict, path: Path) -> FloorImage:
+    try:
+        return FloorImage.top_view(
+            tuple(section.get("x_range_m", (0.70, 0.90))),
+            tuple(section.get("y_range_m", (-0.10, 0.10))),
+            float(section.get("metres_per_pixel", 0.5e-3)),
+        )
+    except ValueError as error:
+        raise ValueError(f"{path}: floor_image: {error}") from None
+
+
+def _dataclass_section(kind, section: dict, path: Path, name: str):
+    known = {f.name for f in fields(kind)}
+    unknown = sorted(set(section) - known)
+    if unknown:
+        raise ValueError(f"{path}: {name}: unknown keys {', '.join(unknown)}; the keys are {', '.join(sorted(known))}")
+    try:
+        return kind(**section)
+    except ValueError as error:
+        raise ValueError(f"{path}: {name}: {error}") from None
+
+
+# ----------------------------------------------------------------------------------------------- running
+
+
+@dataclass(frozen=True)
+class FrameRecord:
+    """One frame: header stamp (ns), base_link's ``pose`` (x, y, theta) in odom after it, the flow's counts
+    (tracked, kept, inliers, spread in pixels), ``status`` (measured, coasted, held, skipped, first) and the
+    ``flag`` saying why when not measured."""
+
+    stamp_ns: int
+    pose: tuple[float, float, float]
+    tracked: int
+    kept: int
+    inliers: int
+    spread_px: float
+    status: str
+    flag: str | None = None
+
+
+class FloorOdometer:
+    """Frame-by-frame odometry of one config: ``step(stamp_ns, image)`` returns that frame's ``FrameRecord``."""
+
+    def __init__(self, config: OdometryConfig):
+        self.config = config
+        rig = config.rig
+        self.table = analytic_table(rig.camera, rig.mount, config.floor, max_outside=0.5)
+        self.flow = FloorFlow(config.klt, mask=self.table.valid)
+        affine = config.floor.affine
+        self._to_metres = affine[:, :2].T.copy(), affine[:, 2].copy()
+        self.pose = np.zeros(3)
+        self._stamp_ns: int | None = None
+        self._measured_ns: int | None = None
+        self._velocity = np.zeros(3)  # the last measured increment per second (dx, dy, dtheta)
+
+    def floor_image(self, image: np.ndarray) -> np.ndarray:
+        """The frame's floor image (8-bit grey); a clear error when its size is not the calibration's."""
+        width, height = self.table.source_size
+        if image.shape[:2] != (height, width):
+            raise ValueError(
+                f"the images are {image.shape[1]} x {image.shape[0]} pixels, the calibration's camera {width} x "
+                f"{height}: wrong topic or wrong calibration"
+            )
+        if image.dtype == np.uint16:
+            image = (image >> 8).astype(np.uint8)
+        if image.ndim == 3:
+            image = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY if image.shape[2] == 3 else cv2.COLOR_RGBA2GRAY)
+        return self.table.apply(image)
+
+    def step(self, stamp_ns: int, image: np.ndarray) -> FrameRecord:
+        """Take one camera frame (H, W) in stamp order; return its record."""
+        previous = self._stamp_ns
+        if previous is not None and stamp_ns <= previous:
+            problem = "repeats" if stamp_ns == previous else f"is {(previous - stamp_ns) * 1e-9:.3f} s before"
+            return self._record(stamp_ns, None, "skipped", f"stamp out of order: {problem} the previous; skipped")
+        floor = self.floor_image(image)
+        self._stamp_ns = stamp_ns
+        if previous is None:
+            self.flow.track(floor)
+            self._measured_ns = stamp_ns
+            return self._record(stamp_ns, None, "first")
+        dt = (stamp_ns - previous) * 1e-9
+        if dt > self.config.max_gap_s:
+            self.flow.restart()
+            self.flow.track(floor)
+            self._velocity[:] = 0.0
+            return self._record(stamp_ns, None, "held", f"gap of {dt:.2f} s: motion across it unknown, pose held")
+        measurement = self.flow.track(floor)
+        if not measurement.quality.ok:
+            return self._coast(stamp_ns, dt, measurement, measurement.quality.flag)
+        increment = self._increment(measurement, dt)
+        if increment is None:
+            return self._coast(stamp_ns, dt, measurement, "rigid fit: too few tracks agree")
+        self.pose = compose(self.pose, increment)
+        self._velocity = increment / dt
+        self._measured_ns = stamp_ns
+        return self._record(stamp_ns, measurement, "measured")
+
+    def _coast(self, stamp_ns: int, dt: float, measurement: FlowMeasurement, why: str) -> FrameRecord:
+        if (stamp_ns - self._measured_ns) * 1e-9 <= self.config.max_gap_s:
+            self.pose = compose(self.pose, self._velocity * dt)
+            return self._record(stamp_ns, measurement, "coasted", why)
+        return self._record(stamp_ns, measurement, "held", why)
+
+    def _metres(self, uv: np.ndarray) -> np.ndarray:
+        matrix, offset = self._to_metres
+        return uv @ matrix + offset
+
+    def _increment(self, measurement: FlowMeasurement, dt: float) -> np.ndarray | None:
+        method = self.config.method
+        if method == "gpo-rigid":
+            return self._rigid_increment(measurement)
+        vector = measurement.median if self.config.vector == "median" else measurement.mean
+        moved = self._to_metres[0].T @ vector  # floor displacement in base_link, metres
+        if method == "gpo":
+            return self.config.model.step(np.zeros(3), -moved, dt)  # from the origin, the pose is the increment
+        where = self._metres(np.median(measurement.start, axis=0))
+        return increment_from_point_motion(where, where + moved)
+
+    def _rigid_increment(self, measurement: FlowMeasurement) -> np.ndarray | None:
+        start, end = self._metres(measurement.start), self._metres(measurement.end)
+        threshold = RANSAC_THRESHOLD_PX * self.config.floor.metres_per_pixel
+        _, inliers = cv2.estimateAffinePartial2D(
+            start, end, method=cv2.RANSAC, ransacReprojThreshold=threshold, maxIters=200, confidence=0.995
+        )
+        if inliers is None or inliers.sum() < self.config.klt.min_tracks:
+            return None
+        chosen = inliers.ravel().astype(bool)
+        return increment_from_point_pairs(start[chosen], end[chosen])
+
+    def _record(self, stamp_ns, measurement, status, flag=None) -> FrameRecord:
+        quality = measurement.quality if measurement is not None else None
+        counts = (quality.tracked, quality.kept, quality.inliers, quality.spread_px) if quality else (0, 0, 0, math.nan)
+        return FrameRecord(int(stamp_ns), tuple(float(v) for v in self.pose), *counts, status, flag)
+
+
+@dataclass
+class OdometryResult:
+    """A run's frames and timing: ``records`` (one per frame read), ``seconds`` of wall time, the ``config``,
+    the recording's ``source`` and ``topic``, and ``error``: why the run stopped early, or None."""
+
+    records: list[FrameRecord]
+    seconds: float
+    config: OdometryConfig
+    source: str
+    topic: str
+    error: str | None = None
+
+    @property
+    def trajectory(self) -> Trajectory:
+        """base_link in odom at every frame that was not skipped."""
+        kept = [r for r in self.records if r.status != "skipped"]
+        poses = np.array([r.pose for r in kept]).reshape(-1, 3)
+        stamps = np.array([r.stamp_ns for r in kept], dtype=np.int64)
+        return Trajectory.from_planar(stamps, poses[:, 0], poses[:, 1], poses[:, 2], frame_id="odom")
+
+    @property
+    def frames_per_second(self) -> float:
+        return len(self.records) / self.seconds if self.seconds > 0 else math.nan
+
+    def summary(self) -> dict:
+        """Plain numbers for people and files: distance, frames by status, flags by reason, speed."""
+        statuses = Counter(r.status for r in self.records)
+        reasons = Counter(_reason(r.flag) for r in self.records if r.flag)
+        trajectory = self.trajectory
+        return {
+            "source": self.source,
+            "topic": self.topic,
+            "method": self.config.method,
+            "vector": self.config.vector,
+            "frames": len(self.records),
+            **{f"frames_{status}": statuses.get(status, 0) for status in ("measured", "coasted", "held", "skipped")},
+            "flags": dict(reasons.most_common()),
+            "distance_m": round(trajectory.path_length, 4),
+            "duration_s": round(float(np.ptp(trajectory.times)), 3) if len(trajectory) else 0.0,
+            "frames_per_second": round(self.frames_per_second, 1),
+            "stopped_early": self.error,
+        }
+
+    def write(self, tum_path) -> tuple[Path, Path]:
+        """Write the trajectory as TUM and the summary as YAML beside it (``.summary.yaml``); return both paths."""
+        tum_path = Path(tum_path)
+        tum_path.parent.mkdir(parents=True, exist_ok=True)
+        summary_path = tum_path.with_suffix(".summary.yaml")
+        summary_path.write_text(yaml.safe_dump(self.summary(), sort_keys=False))
+        return self.trajectory.write_tum(tum_path), summary_path
+
+
+def _reason(flag: str) -> str:
+    """A flag's kind, without its numbers: the text before the first colon."""
+    return flag.split(":")[0].split("(")[0].strip()
+
+
+def run(bag, config: OdometryConfig | None = None, topic: str | None = None, progress: bool = True) -> OdometryResult:
+    """Odometry of the camera frames of ``bag`` (``topic``: default the rig's image topic when the bag has it,
+    else its only image topic). Returns what was computed even when reading stops early: then ``error`` says
+    why (the error is not raised, so that the partial result can be written)."""
+    config = config or load_config()
+    odometer = FloorOdometer(config)
+    records: list[FrameRecord] = []
+    with Recording(bag) as recording:
+        topic = _choose_topic(recording, topic, config.rig)
+        started = time.perf_counter()
+        error = None
+        try:
+            for frame in recording.frames(topic, progress=progress):
+                records.append(odometer.step(frame.stamp_ns, frame.image))
+        except (ValueError, KeyError, OSError) as failure:
+            if not records:
+                raise
+            error = f"after {len(records)} frames: {failure}"
+        seconds = time.perf_counter() - started
+    return OdometryResult(records, seconds, config, str(bag), topic, error)
+
+
+def _choose_topic(recording: Recording, topic: str | None, rig: Rig) -> str:
+    if topic is not None:
+        return recording.image_topic(topic)
+    if rig.image_topic in {t.name for t in recording.topics()}:
+        return recording.image_topic(rig.image_topic)
+    return recording.image_topic()
