@@ -1,6 +1,7 @@
 """The ``python -m gpo`` command line.
 
-python -m gpo demo [--out DIR]    figures and tables of what the suite holds, written to DIR
+python -m gpo demo [--out DIR]    figures, tables and the sample recording's odometry, written to DIR
+python -m gpo run BAG --config RIG.yaml --out traj.tum [--method gpo|gpo-exact|gpo-rigid] [--topic T]
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from scipy.spatial.transform import Rotation
 from gpo.bag import Recording, describe
 from gpo.calibrate import main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
+from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
 from gpo.sim.record import GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, PRESETS, recording, simulate, write_sample_data
 from gpo.trajectory import base_from_sensor_odometry
@@ -49,7 +51,7 @@ def demo(out: Path) -> list[Path]:
 
     written.append(out / "field_of_view.txt")
     written[-1].write_text("".join(f"{label}: {field_of_view_text(camera)}\n" for label, camera in cameras.items()))
-    return written + sample_recording_figures(out)
+    return written + sample_recording_figures(out) + sample_odometry(out)
 
 
 def sample_recording_figures(out: Path) -> list[Path]:
@@ -84,6 +86,41 @@ def sample_recording_figures(out: Path) -> list[Path]:
     ]
 
 
+def sample_odometry(out: Path) -> list[Path]:
+    """Ground Plane Odometry (``gpo-exact``) of the sample recording: trajectory, summary and a plot against truth."""
+    bag = recording("sample")
+    result = run(bag, load_config(), progress=False)
+    tum, summary = result.write(out / "sample_gpo_exact.tum")
+    with Recording(bag) as recorded:
+        truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
+    estimate = result.trajectory
+    first = min(range(len(truth)), key=lambda i: abs(int(truth.stamps_ns[i]) - int(estimate.stamps_ns[0])))
+    placed = estimate.compose((truth.rotations[first], truth.positions[first]), frame_id="world")
+    fig = Figure(figsize=(7, 5))
+    draw_paths({"ground truth": truth, "Ground Plane Odometry (gpo-exact)": placed}, ax=fig.subplots())
+    plot = out / "sample_gpo_exact.png"
+    fig.savefig(plot, dpi=110, bbox_inches="tight")
+    return [tum, summary, plot]
+
+
+def print_run(result: OdometryResult) -> None:
+    """A run's summary for people."""
+    summary = result.summary()
+    print(
+        f"{summary['frames']} frames of {summary['topic']} in {result.seconds:.1f} s "
+        f"({summary['frames_per_second']} frames/s), method {summary['method']}, {summary['vector']} vector"
+    )
+    print(f"distance travelled: {summary['distance_m']:.3f} m over {summary['duration_s']:.1f} s")
+    print(
+        "frames: "
+        + ", ".join(f"{summary[f'frames_{s}']} {s}" for s in ("measured", "coasted", "held", "skipped"))
+    )
+    for reason, count in summary["flags"].items():
+        print(f"  flagged {count}: {reason}")
+    if result.error:
+        print(f"stopped early {result.error}; the frames before were kept", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m gpo", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
@@ -105,6 +142,13 @@ def main(argv: list[str] | None = None) -> int:
     calibrate_parser.add_argument("--square", required=True, type=float, help="square size in metres")
     calibrate_parser.add_argument("--model", default="eucm", choices=("eucm", "pinhole"))
     calibrate_parser.add_argument("--out", type=Path, default=Path("calib.yaml"), help="Kalibr camchain to write")
+    run_parser = commands.add_parser("run", help="odometry of a recording: a TUM trajectory and a summary")
+    run_parser.add_argument("bag", type=Path, help="a ROS1 .bag, a ROS2 bag folder, or a .db3/.mcap file")
+    run_parser.add_argument("--config", type=Path, help="run config YAML (default: the simulated T265 rig)")
+    run_parser.add_argument("--out", type=Path, default=Path("traj.tum"), help="TUM file to write (default traj.tum)")
+    run_parser.add_argument("--method", choices=METHODS, help="motion estimator (default: the config's)")
+    run_parser.add_argument("--vector", choices=VECTORS, help="motion vector statistic (default: the config's)")
+    run_parser.add_argument("--topic", help="image topic (default: the config's, else the bag's only one)")
     args = parser.parse_args(argv)
 
     try:
@@ -123,6 +167,14 @@ def main(argv: list[str] | None = None) -> int:
         elif args.command == "calibrate":
             result = main_calibrate(args.images, args.board, args.square, args.model, args.out)
             return 0 if result.ok else 1
+        elif args.command == "run":
+            config = load_config(args.config)
+            changes = {k: v for k, v in (("method", args.method), ("vector", args.vector)) if v}
+            result = run(args.bag, config.replace(**changes) if changes else config, args.topic)
+            print_run(result)
+            for path in result.write(args.out):
+                print(f"wrote {path}")
+            return 1 if result.error else 0
         elif args.command == "sample-data":
             for path in write_sample_data(args.out):
                 print(f"wrote {path}")

@@ -14,7 +14,8 @@ Each frame gets a ``FlowQuality``; a frame that cannot be measured is flagged wi
 a wrong vector: too few corners (a floor without texture), too few tracks kept (a bad frame, motion blur),
 vectors that disagree (no consensus), or a motion near the pyramid's reach.
 
-Pixels (u, v): u right, v down, as OpenCV.
+Each floor image is first scaled to a common mean and contrast (exposure flicker breaks Lucas-Kanade's constant
+brightness). Pixels (u, v): u right, v down, as OpenCV.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import cv2
 import numpy as np
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
+GREY_MEAN, GREY_SPREAD = 128.0, 40.0  # every floor image is scaled to this mean and standard deviation
 
 
 class FlowError(ValueError):
@@ -145,6 +147,7 @@ class FloorFlow:
     _predicted: bool = field(default=False, init=False, repr=False)
     _points: np.ndarray | None = field(default=None, init=False, repr=False)
     _detect_mask: np.ndarray | None = field(default=None, init=False, repr=False)
+    _valid: np.ndarray | None = field(default=None, init=False, repr=False)
     _size: tuple[int, int] | None = field(default=None, init=False, repr=False)
 
     def restart(self) -> None:
@@ -155,6 +158,7 @@ class FloorFlow:
     def track(self, image: np.ndarray) -> FlowMeasurement | None:
         """The motion from the previous frame to ``image`` (H, W) uint8; None for the first frame."""
         self._check(image)
+        image = self._normalised(image)
         previous, points = self._image, self._points
         self._image = image
         if previous is None:
@@ -214,9 +218,17 @@ class FloorFlow:
         size = image.shape[::-1]
         if self._size is None:
             self._size = size
+            self._valid = None if self.mask is None else self.mask.astype(np.uint8)
             self._detect_mask = self._shrunk_mask(image.shape)
         elif size != self._size:
             raise FlowError(f"floor image size changed from {self._size} to {size} (width, height)")
+
+    def _normalised(self, image: np.ndarray) -> np.ndarray:
+        """``image`` scaled to one mean and contrast over the mask: Lucas-Kanade assumes constant brightness, and a
+        few per cent of exposure flicker on a low-contrast floor otherwise pulls every track off."""
+        mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(image, mask=self._valid))
+        gain = GREY_SPREAD / max(spread, 1e-3)
+        return cv2.convertScaleAbs(image, alpha=gain, beta=GREY_MEAN - gain * mean)
 
     def _shrunk_mask(self, shape) -> np.ndarray:
         """Where a corner's whole window lies inside the mask and the image."""
@@ -228,8 +240,9 @@ class FloorFlow:
                 raise FlowError(f"mask shape {self.mask.shape} differs from the floor image's {shape}")
             inside[self.mask.astype(bool)] = 255
         half = self.parameters.window_px // 2 + 1
+        inside = cv2.erode(inside, np.ones((2 * half + 1, 2 * half + 1), np.uint8))  # the image's edge does not erode
         inside[:half], inside[-half:], inside[:, :half], inside[:, -half:] = 0, 0, 0, 0
-        return cv2.erode(inside, np.ones((2 * half + 1, 2 * half + 1), np.uint8))
+        return inside
 
     def _detect(self, image: np.ndarray) -> np.ndarray:
         p = self.parameters
