@@ -143,8 +143,9 @@ class FloorFlow:
     parameters: KLTParameters = field(default_factory=KLTParameters)
     mask: np.ndarray | None = None
     _image: np.ndarray | None = field(default=None, init=False, repr=False)
-    _prediction: np.ndarray = field(default_factory=lambda: np.zeros(2, np.float32), init=False, repr=False)
+    _velocity: np.ndarray = field(default_factory=lambda: np.zeros(2, np.float32), init=False, repr=False)
     _predicted: bool = field(default=False, init=False, repr=False)
+    _time_s: float = field(default=0.0, init=False, repr=False)
     _points: np.ndarray | None = field(default=None, init=False, repr=False)
     _detect_mask: np.ndarray | None = field(default=None, init=False, repr=False)
     _valid: np.ndarray | None = field(default=None, init=False, repr=False)
@@ -153,27 +154,33 @@ class FloorFlow:
     def restart(self) -> None:
         """Forget the previous frame: the next ``track`` call starts afresh."""
         self._image, self._points = None, None
-        self._prediction, self._predicted = np.zeros(2, np.float32), False
+        self._velocity, self._predicted = np.zeros(2, np.float32), False
 
-    def track(self, image: np.ndarray) -> FlowMeasurement | None:
-        """The motion from the previous frame to ``image`` (H, W) uint8; None for the first frame."""
+    def track(self, image: np.ndarray, time_s: float | None = None) -> FlowMeasurement | None:
+        """The motion from the previous frame to ``image`` (H, W) uint8; None for the first frame.
+
+        ``time_s``: the frame's time in seconds, so that the predicted motion scales with the time since the
+        previous frame (a dropped frame doubles it); None counts frames instead.
+        """
         self._check(image)
         image = self._normalised(image)
         previous, points = self._image, self._points
-        self._image = image
+        elapsed = 1.0 if time_s is None or previous is None else time_s - self._time_s
+        self._image, self._time_s = image, 0.0 if time_s is None else time_s
         if previous is None:
             self._points = self._detect(image)
             return None
         if len(points) < self.parameters.redetect_below:
             points = self._detect(previous)
-        measurement, surviving = self._measure(previous, image, points)
+        prediction = (self._velocity * elapsed).astype(np.float32)
+        measurement, surviving = self._measure(previous, image, points, prediction)
         self._points = surviving
         self._predicted = measurement.quality.ok
         if measurement.quality.ok:
-            self._prediction = measurement.median.astype(np.float32)
+            self._velocity = (measurement.median / elapsed).astype(np.float32)
         return measurement
 
-    def _measure(self, previous, image, points) -> tuple[FlowMeasurement, np.ndarray]:
+    def _measure(self, previous, image, points, prediction) -> tuple[FlowMeasurement, np.ndarray]:
         p = self.parameters
         nothing = np.zeros((0, 2), np.float32)
         if len(points) < p.min_tracks:
@@ -184,10 +191,10 @@ class FloorFlow:
         start = points.reshape(-1, 1, 2)
         lk = {"winSize": window, "maxLevel": p.pyramid_levels, "criteria": criteria}
         lk["flags"] = cv2.OPTFLOW_USE_INITIAL_FLOW
-        end, status, _ = cv2.calcOpticalFlowPyrLK(previous, image, start, start + self._prediction, **lk)
+        end, status, _ = cv2.calcOpticalFlowPyrLK(previous, image, start, start + prediction, **lk)
         if self._predicted:
             lk["maxLevel"] = 0
-        back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, previous, end, end - self._prediction, **lk)
+        back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, previous, end, end - prediction, **lk)
         start, end, back = start.reshape(-1, 2), end.reshape(-1, 2), back.reshape(-1, 2)
         keep = (status.ravel() == 1) & (back_status.ravel() == 1)
         keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections import Counter
 from dataclasses import dataclass, field, fields
 from importlib import resources
@@ -31,7 +32,7 @@ import cv2
 import numpy as np
 import yaml
 
-from gpo.bag import Recording
+from gpo.bag import Recording, StampWarning
 from gpo.config import load_rig, rig_to_dict
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
 from gpo.ground import FloorImage, analytic_table
@@ -208,16 +209,16 @@ class FloorOdometer:
         floor = self.floor_image(image)
         self._stamp_ns = stamp_ns
         if previous is None:
-            self.flow.track(floor)
+            self.flow.track(floor, stamp_ns * 1e-9)
             self._measured_ns = stamp_ns
             return self._record(stamp_ns, None, "first")
         dt = (stamp_ns - previous) * 1e-9
         if dt > self.config.max_gap_s:
             self.flow.restart()
-            self.flow.track(floor)
+            self.flow.track(floor, stamp_ns * 1e-9)
             self._velocity[:] = 0.0
-            return self._record(stamp_ns, None, "held", f"gap of {dt:.2f} s: motion across it unknown, pose held")
-        measurement = self.flow.track(floor)
+            return self._record(stamp_ns, None, "held", f"frame gap: {dt:.2f} s without frames, motion unknown")
+        measurement = self.flow.track(floor, stamp_ns * 1e-9)
         if not measurement.quality.ok:
             return self._coast(stamp_ns, dt, measurement, measurement.quality.flag)
         increment = self._increment(measurement, dt)
@@ -330,7 +331,8 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
     config = config or load_config()
     odometer = FloorOdometer(config)
     records: list[FrameRecord] = []
-    with Recording(bag) as recording:
+    with Recording(bag) as recording, warnings.catch_warnings():
+        warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
         topic = _choose_topic(recording, topic, config.rig)
         started = time.perf_counter()
         error = None

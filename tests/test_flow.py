@@ -1,0 +1,102 @@
+"""Floor flow against known image motions: shifts, rotations, outliers, flicker, no texture."""
+
+import cv2
+import numpy as np
+import pytest
+
+from gpo.flow import FloorFlow, FlowError, KLTParameters
+from gpo.kinematics import increment_from_point_pairs
+
+
+def _texture(size=240, seed=0) -> np.ndarray:
+    """A floor-like random texture, smooth enough for Lucas-Kanade."""
+    rng = np.random.default_rng(seed)
+    noise = rng.normal(0.0, 1.0, (size, size)).astype(np.float32)
+    blurred = cv2.GaussianBlur(noise, (0, 0), 2.0)
+    return cv2.normalize(blurred, None, 30, 220, cv2.NORM_MINMAX).astype(np.uint8)
+
+
+def _moved(image, du=0.0, dv=0.0, angle=0.0, centre=(120.0, 120.0)) -> np.ndarray:
+    """``image`` turned by ``angle`` (rad) about ``centre`` then shifted by (du, dv) pixels: a point at p goes to
+    R (p - centre) + centre + (du, dv)."""
+    matrix = cv2.getRotationMatrix2D(centre, -np.degrees(angle), 1.0)
+    matrix[:, 2] += (du, dv)
+    return cv2.warpAffine(image, matrix, image.shape[::-1], flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+
+
+def _track(first, second, **parameters):
+    flow = FloorFlow(KLTParameters(**parameters))
+    assert flow.track(first) is None
+    return flow.track(second)
+
+
+@pytest.mark.parametrize(("du", "dv"), [(0.3, -0.7), (4.25, 2.5), (-6.6, 9.1)])
+def test_median_vector_equals_a_known_shift(du, dv):
+    image = _texture()
+    measurement = _track(image, _moved(image, du, dv))
+    assert measurement.quality.ok
+    np.testing.assert_allclose(measurement.median, [du, dv], atol=0.05)
+    assert measurement.quality.kept > 50
+
+
+def test_rigid_fit_of_tracks_recovers_a_rotation():
+    image = _texture()
+    angle = np.radians(1.5)
+    measurement = _track(image, _moved(image, 3.0, -2.0, angle))
+    increment = increment_from_point_pairs(measurement.start, measurement.end)
+    assert -increment[2] == pytest.approx(angle, abs=2e-4)
+
+
+def test_median_resists_outliers_that_pull_the_mean():
+    """A glint that stays put on a quarter of the image: zero-motion vectors, like a highlight on the floor."""
+    image = _texture()
+    second = _moved(image, 0.0, 8.0)
+    glint = _texture(size=60, seed=1)
+    first, second = image.copy(), second.copy()
+    first[90:150, 20:80] = glint
+    second[90:150, 20:80] = glint
+    measurement = _track(first, second, max_corners=300, min_distance_px=5)
+    assert measurement.quality.ok
+    assert measurement.median[1] == pytest.approx(8.0, abs=0.1)
+    assert measurement.mean[1] < 7.5  # pulled towards the glint's zero motion
+    assert measurement.quality.inliers < measurement.quality.kept
+
+
+def test_exposure_flicker_does_not_break_tracking():
+    image = _texture()
+    brighter = cv2.convertScaleAbs(_moved(image, 2.0, 6.0), alpha=1.12, beta=5)
+    measurement = _track(image, brighter)
+    np.testing.assert_allclose(measurement.median, [2.0, 6.0], atol=0.05)
+
+
+def test_textureless_floor_is_flagged_not_measured():
+    flat = np.full((240, 240), 128, np.uint8)
+    measurement = _track(flat, flat)
+    assert not measurement.quality.ok
+    assert "no texture" in measurement.quality.flag
+    assert np.isnan(measurement.median).all()
+
+
+def test_tracks_carry_over_with_the_predicted_motion():
+    """20 pixels a frame: each search starts from the previous frame's motion, tracks are reused until too few."""
+    image = _texture(size=400)
+    flow = FloorFlow(KLTParameters(redetect_below=60))
+    flow.track(_moved(image, 0.0, 0.0, centre=(200.0, 200.0)))
+    measurements = [flow.track(_moved(image, 0.5 * k, 20.0 * k, centre=(200.0, 200.0))) for k in range(1, 9)]
+    assert all(m.quality.ok for m in measurements[1:])
+    np.testing.assert_allclose([m.median for m in measurements[1:]], [[0.5, 20.0]] * 7, atol=0.05)
+    tracked = [m.quality.tracked for m in measurements]
+    assert min(tracked) < max(tracked)  # reused tracks thin out, then corners are detected afresh
+
+
+def test_bad_images_and_parameters_are_refused():
+    flow = FloorFlow()
+    with pytest.raises(FlowError, match="uint8"):
+        flow.track(np.zeros((50, 50), np.float32))
+    flow.track(np.zeros((50, 50), np.uint8))
+    with pytest.raises(FlowError, match="size changed"):
+        flow.track(np.zeros((60, 50), np.uint8))
+    with pytest.raises(ValueError, match="window_px"):
+        KLTParameters(window_px=20)
+    with pytest.raises(FlowError, match="mask shape"):
+        FloorFlow(mask=np.ones((10, 10), bool)).track(np.zeros((50, 50), np.uint8))

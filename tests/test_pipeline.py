@@ -1,0 +1,152 @@
+"""Odometry from bags: accuracy against the simulator's truth, every bag format, and bad input."""
+
+import numpy as np
+import pytest
+
+from gpo.__main__ import main
+from gpo.bag import BagWriter, Recording
+from gpo.kinematics import compose
+from gpo.pipeline import FloorOdometer, load_config, run, save_config
+from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+from gpo.sim.rigs import t265_rig
+
+FRAMES = 60  # two seconds of the sample recording: straight ahead at up to 0.5 m/s
+
+
+@pytest.fixture(scope="module")
+def sample():
+    """The sample recording's path, its first frames and its ground truth."""
+    path = recording("sample")
+    with Recording(path) as bag:
+        frames = [frame for _, frame in zip(range(FRAMES), bag.frames(progress=False), strict=False)]
+        truth = bag.trajectory(GROUND_TRUTH_TOPIC)
+    return path, frames, truth
+
+
+def _final_error(trajectory, truth) -> tuple[float, float, float]:
+    """Final position error (m), heading error (rad) and distance (m) after placing the estimate on the truth."""
+    index = np.searchsorted(truth.stamps_ns, trajectory.stamps_ns)
+    assert np.all(truth.stamps_ns[index] == trajectory.stamps_ns)
+    true = np.column_stack([truth.positions[index, :2], np.unwrap(truth.yaw[index])])
+    estimate = compose(true[0], np.column_stack([trajectory.positions[:, :2], np.unwrap(trajectory.yaw)]))
+    error = estimate[-1] - true[-1]
+    distance = float(np.linalg.norm(np.diff(true[:, :2], axis=0), axis=1).sum())
+    return float(np.hypot(*error[:2])), float(error[2]), distance
+
+
+def test_exact_and_rigid_follow_the_sample_with_its_reverse_and_spin(sample):
+    path, _, truth = sample
+    for method, bound in (("gpo-exact", 0.003), ("gpo-rigid", 0.01)):
+        result = run(path, load_config().replace(method=method), progress=False)
+        position, heading, distance = _final_error(result.trajectory, truth)
+        assert position / distance < bound, method
+        assert abs(np.degrees(heading)) < 3.0, method
+        assert result.summary()["frames_measured"] == len(result.records) - 1
+
+
+def test_the_papers_model_reads_reverse_driving_as_forward(sample):
+    path, _, truth = sample
+    result = run(path, load_config().replace(method="gpo"), progress=False)
+    position, _, distance = _final_error(result.trajectory, truth)
+    assert position / distance > 0.1  # the sample's reverse leg and spin are read wrongly
+
+
+def _write(path, frames, stamps, images=None, format="ros1"):
+    rig = t265_rig()
+    with BagWriter(path, format) as bag:
+        for index, (frame, stamp) in enumerate(zip(frames, stamps, strict=True)):
+            image = frame.image if images is None else images[index]
+            bag.add_image(rig.image_topic, int(stamp), image, rig.frame_id)
+    return path
+
+
+@pytest.mark.parametrize("format", ["ros1", "ros2", "ros2-mcap"])
+def test_every_bag_format_gives_the_same_trajectory(sample, tmp_path, format):
+    _, frames, _ = sample
+    name = "short.bag" if format == "ros1" else "short"
+    bag = _write(tmp_path / name, frames, [f.stamp_ns for f in frames], format=format)
+    result = run(bag, progress=False)
+    reference = run(_write(tmp_path / "reference.bag", frames, [f.stamp_ns for f in frames]), progress=False)
+    np.testing.assert_array_equal(result.trajectory.positions, reference.trajectory.positions)
+    assert result.trajectory.path_length > 0.3
+
+
+def test_duplicates_gaps_and_a_floor_without_texture_are_flagged_and_the_run_goes_on(sample, tmp_path):
+    _, frames, truth = sample
+    stamps = [f.stamp_ns for f in frames]
+    stamps[40:] = [s + 3_000_000_000 for s in stamps[40:]]  # a 3 s gap before frame 40
+    stamps[20] = stamps[19]  # frame 20 repeats frame 19's stamp
+    images = [f.image for f in frames]
+    images[30:33] = [np.full_like(images[0], 90)] * 3  # three frames of a blank floor
+    result = run(_write(tmp_path / "bad.bag", frames, stamps, images), progress=False)
+    summary = result.summary()
+    assert summary["frames"] == FRAMES
+    assert summary["frames_skipped"] == 1
+    assert summary["frames_held"] == 1
+    # the first blank frame loses its tracks, the next two have no corners, nor has the one after them to start from
+    assert summary["frames_coasted"] == 4
+    assert summary["flags"] == {"too few corners": 3, "stamp out of order": 1, "too few tracks kept": 1, "frame gap": 1}
+    # coasting over the blank frames (four frames, 6 cm of travel while speeding up) costs under a centimetre
+    before_gap = result.trajectory
+    position, _, _ = _final_error(
+        type(before_gap)(before_gap.stamps_ns[:38], before_gap.positions[:38], before_gap.quaternions[:38]), truth
+    )
+    assert position < 0.01
+
+
+def test_frames_out_of_order_are_skipped(sample):
+    _, frames, _ = sample
+    odometer = FloorOdometer(load_config())
+    records = [odometer.step(frames[i].stamp_ns, frames[i].image) for i in (0, 1, 2, 1, 3)]
+    assert [r.status for r in records] == ["first", "measured", "measured", "skipped", "measured"]
+    assert "0.033 s before" in records[3].flag
+
+
+def test_missing_topic_and_wrong_image_size_are_clear_errors(sample, tmp_path):
+    _, frames, _ = sample
+    bag = _write(tmp_path / "ok.bag", frames[:3], [f.stamp_ns for f in frames[:3]])
+    with pytest.raises(ValueError, match="/camera/fisheye1/image_raw"):
+        run(bag, topic="/camera/fisheye2/image_raw", progress=False)
+    small = [f.image[:400, :424] for f in frames[:3]]
+    with pytest.raises(ValueError, match="424 x 400 pixels, the calibration's camera 848 x 800"):
+        run(_write(tmp_path / "small.bag", frames[:3], [f.stamp_ns for f in frames[:3]], small), progress=False)
+
+
+def test_a_run_that_stops_early_keeps_and_writes_what_it_computed(sample, tmp_path, monkeypatch, capsys):
+    path, frames, _ = sample
+
+    def broken(self, *args, **kwargs):
+        yield from frames[:10]
+        raise ValueError("message 10 is damaged")
+
+    monkeypatch.setattr(Recording, "frames", broken)
+    assert main(["run", str(path), "--out", str(tmp_path / "traj.tum")]) == 1
+    assert "stopped early after 10 frames: message 10 is damaged" in capsys.readouterr().err
+    assert len((tmp_path / "traj.tum").read_text().splitlines()) == 11  # a header and ten poses
+    assert "stopped_early: 'after 10 frames" in (tmp_path / "traj.summary.yaml").read_text()
+
+
+def test_config_round_trip_and_the_default(tmp_path):
+    config = load_config()
+    rig = t265_rig()
+    assert config.rig.camera == rig.camera
+    np.testing.assert_allclose(config.rig.mount.position, rig.mount.position)
+    np.testing.assert_allclose(config.rig.mount.rotation.as_matrix(), rig.mount.rotation.as_matrix(), atol=1e-15)
+    changed = config.replace(method="gpo-rigid", vector="mean")
+    again = load_config(save_config(tmp_path / "rig.yaml", changed))
+    assert (again.method, again.vector, again.klt, again.model) == ("gpo-rigid", "mean", config.klt, config.model)
+    np.testing.assert_array_equal(again.floor.affine, config.floor.affine)
+    text = (tmp_path / "rig.yaml").read_text().replace("max_corners", "corners")
+    (tmp_path / "bad.yaml").write_text(text)
+    with pytest.raises(ValueError, match=r"bad\.yaml: klt: unknown keys corners"):
+        load_config(tmp_path / "bad.yaml")
+    with pytest.raises(ValueError, match="unknown method"):
+        config.replace(method="magic")
+
+
+def test_cli_run_writes_trajectory_and_summary(sample, tmp_path, capsys):
+    path, _, _ = sample
+    assert main(["run", str(path), "--out", str(tmp_path / "t.tum"), "--method", "gpo-exact"]) == 0
+    printed = capsys.readouterr().out
+    assert "frames/s" in printed and "distance travelled" in printed
+    assert (tmp_path / "t.summary.yaml").exists()
