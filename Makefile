@@ -19,7 +19,7 @@ $(STAMP): environment.txt pyproject.toml
 
 test: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/python -m gpo recording sample
+	$(BIN)/python -m gpo recording sample short1 short2 short3
 	$(BIN)/python -m pytest -p no:cacheprovider
 
 demo: $(STAMP)

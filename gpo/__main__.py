@@ -134,8 +134,8 @@ def main(argv: list[str] | None = None) -> int:
     info_parser.add_argument("bag", type=Path)
     sample_parser = commands.add_parser("sample-data", help="regenerate the small sample files kept in data/")
     sample_parser.add_argument("--out", type=Path, default=Path("data"), help="output folder (default: data)")
-    recording_parser = commands.add_parser("recording", help="print the cached bag of a preset, making it if needed")
-    recording_parser.add_argument("name", nargs="?", default="sample", choices=sorted(PRESETS))
+    recording_parser = commands.add_parser("recording", help="print the cached bags of presets, making them if needed")
+    recording_parser.add_argument("names", nargs="*", default=["sample"], choices=sorted(PRESETS), metavar="NAME")
     calibrate_parser = commands.add_parser("calibrate", help="calibrate a camera from chessboard images")
     calibrate_parser.add_argument("images", nargs="+", type=Path, help="image files of the board")
     calibrate_parser.add_argument("--board", required=True, help="inner corners per row x per column, e.g. 7x5")
@@ -163,7 +163,8 @@ def main(argv: list[str] | None = None) -> int:
         elif args.command == "info":
             print(describe(args.bag))
         elif args.command == "recording":
-            print(recording(args.name))
+            for name in args.names:
+                print(recording(name))
         elif args.command == "calibrate":
             result = main_calibrate(args.images, args.board, args.square, args.model, args.out)
             return 0 if result.ok else 1
