@@ -318,12 +318,30 @@ def test_sample_and_test_paths_take_their_stated_time():
     assert 2.5 <= named_plan("test").duration_s <= 3.5
 
 
-@pytest.mark.parametrize("name", ["sample", "long1", "long2", "long3"])
-def test_sample_and_long_paths_reverse_and_spin(name):
-    plan = named_plan(name)
+def test_sample_path_reverses_and_spins():
+    plan = named_plan("sample")
     state = plan.sample(np.arange(0.0, plan.duration_s, 0.01))
     assert state.v.min() < -0.1
     assert np.any((state.v == 0.0) & (np.abs(state.omega) > 0.1))
+
+
+@pytest.mark.parametrize("name", ["short3", "long1", "long2", "long3"])
+def test_car_like_paths_drive_forward_and_turn_no_tighter_than_a_metre(name):
+    """A bicycle-model robot: never in reverse, never turning on the spot, |ω| <= v / 1 m everywhere."""
+    plan = named_plan(name)
+    state = plan.sample(np.arange(0.0, plan.duration_s, 1e-3))
+    assert state.v.min() >= 0.0
+    assert np.all(np.abs(state.omega) <= state.v / 1.0 + 1e-9)
+
+
+def test_long_paths_are_like_the_papers_tests():
+    """Test4 closes a loop; Test5 has S-curves (the heading swings both ways); Test6 stops on the way."""
+    loop = named_plan("long1")
+    np.testing.assert_allclose(end_pose(loop), (0.0, 0.0, 2 * np.pi), atol=1e-9)
+    curves = named_plan("long2").sample(np.arange(0.0, named_plan("long2").duration_s, 0.01))
+    assert curves.omega.min() < -0.1 and curves.omega.max() > 0.1
+    stops = named_plan("long3")
+    assert sum(end - start for start, end in segment_windows(stops, Stop)) >= 3.0
 
 
 def test_unknown_path_lists_the_names():

@@ -1,4 +1,5 @@
-"""Simulated recordings: what the bag holds equals the simulator's truth, and generation is deterministic."""
+"""Simulated recordings: what the bag holds equals the simulator's truth, generation is deterministic, and the
+short presets' disturbances reach the floor patch the ortho-GPI shows."""
 
 import hashlib
 from pathlib import Path
@@ -18,6 +19,7 @@ from gpo.sim.record import (
     simulate,
     write_sample_data,
 )
+from gpo.sim.render import GPI_PATCH_M
 from gpo.sim.rigs import t265_rig
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -77,3 +79,44 @@ def test_unknown_preset_lists_the_presets():
     with pytest.raises(ValueError, match=r"unknown preset .tset.; the presets are sample"):
         preset("tset")
     assert {"sample", "test", "short1", "long3", "downward-industrial"} <= set(PRESETS)
+
+
+def sheet_cover(sheets, time_s: float, pose: np.ndarray) -> float:
+    """Fraction of the floor patch (a 41 x 41 grid of its points) that some sheet covers at ``time_s``."""
+    x_min, x_max, y_min, y_max = GPI_PATCH_M
+    ahead, left = np.meshgrid(np.linspace(x_min, x_max, 41), np.linspace(y_min, y_max, 41))
+    x, y, yaw = pose
+    world = np.stack([x + np.cos(yaw) * ahead - np.sin(yaw) * left, y + np.sin(yaw) * ahead + np.cos(yaw) * left], -1)
+    covered = np.zeros(ahead.shape, bool)
+    for sheet in sheets:
+        sheet_x, sheet_y, sheet_yaw = sheet.pose(time_s)
+        offset = world - [sheet_x, sheet_y]
+        along = offset @ [np.cos(sheet_yaw), np.sin(sheet_yaw)]
+        across = offset @ [-np.sin(sheet_yaw), np.cos(sheet_yaw)]
+        covered |= (np.abs(along) <= sheet.size_m[0] / 2) & (np.abs(across) <= sheet.size_m[1] / 2)
+    return float(covered.mean())
+
+
+@pytest.mark.parametrize("name", ["short1", "short2", "short3"])
+def test_short_presets_drag_sheets_across_the_floor_patch_and_light_a_glint_in_it(name):
+    """A sheet covers 5-25 % of the patch in 40-50 % of the frames; the glint lies inside it in every frame."""
+    chosen = preset(name)
+    plan = named_plan(chosen.path)
+    times = np.arange(0.0, plan.duration_s, 1.0 / t265_rig().rate_hz)
+    state = plan.sample(times)
+    poses = np.column_stack([state.x, state.y, state.yaw])
+    sheets = chosen.disturbances.place_sheets(times, poses)
+    assert sheets == chosen.disturbances.place_sheets(times, poses)  # seeded
+    covers = np.array([sheet_cover(sheets, time_s, pose) for time_s, pose in zip(times, poses, strict=True)])
+    present = covers > 0.01
+    assert 0.35 <= present.mean() <= 0.55
+    assert 0.05 <= np.median(covers[present]) <= 0.25
+    (glint,) = chosen.disturbances.place_glints()
+    x_min, x_max, y_min, y_max = GPI_PATCH_M
+    assert x_min + glint.radius_m <= glint.centre_m[0] <= x_max - glint.radius_m
+    assert y_min + glint.radius_m <= glint.centre_m[1] <= y_max - glint.radius_m
+
+
+def test_only_the_short_presets_are_disturbed():
+    disturbed = {name for name, chosen in PRESETS.items() if chosen.disturbances.sheets or chosen.disturbances.glints}
+    assert disturbed == {"short1", "short2", "short3"}

@@ -1,5 +1,6 @@
 """The renderer against independent truth: chessboard corners found by OpenCV lie where the camera
-model projects the board's true corners, for both rigs, on the floor and held in front of the camera."""
+model projects the board's true corners, for both rigs, on the floor and held in front of the camera;
+a moving sheet shows where its own trajectory puts it, a glint stays where the camera sees its floor point."""
 
 import cv2
 import numpy as np
@@ -8,7 +9,17 @@ from scipy.spatial.transform import Rotation
 
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_views
 from gpo.sim.floors import FLOOR_KINDS, make_floor
-from gpo.sim.render import FloorRenderer, camera_pose_in_world, render_board_view
+from gpo.sim.render import (
+    GPI_PATCH_M,
+    Disturbances,
+    FloorRenderer,
+    Glint,
+    MovingSheet,
+    Sensor,
+    camera_pose_in_world,
+    print_sheet,
+    render_board_view,
+)
 from gpo.sim.rigs import downward_rig, t265_rig
 from gpo.targets import Chessboard, FloorBoard
 
@@ -104,3 +115,157 @@ def test_calibration_views_fill_the_image_and_their_corners_are_true(rig_name):
     for view in views:
         assert np.median(corner_errors(view.image, CALIBRATION_BOARD, view.corners)) < 0.3
     assert np.array_equal(board_views(camera, 1, seed=3)[0].image, views[0].image)
+
+
+# ------------------------------------------------------------------------------------------ disturbances
+
+QUIET = Sensor(read_noise=0.0, shot_noise=0.0, flicker=0.0, vignetting=0.0)  # images differ only where the scene does
+SHEET = MovingSheet((0.12, 0.085), (0.80, -0.02), 0.0, (0.04, 0.12), 0.3, 0.4, seed=5)
+SHEET_TIMES = (0.0, 0.3)
+SHEET_POSES = (np.array([0.0, 0.0, 0.0]), np.array([0.06, 0.0, 0.03]))  # the robot rolls 6 cm and turns
+
+
+@pytest.fixture(scope="module")
+def floor():
+    return make_floor("raised", (-0.5, 1.6, -0.8, 0.8), texel=1e-3, seed=6)
+
+
+def world_to_pixels(rig, pose, world_xy: np.ndarray) -> np.ndarray:
+    """Camera pixels (N, 2) of floor points (N, 2) in world, with the robot at ``pose``."""
+    rotation, centre = camera_pose_in_world(rig, pose)
+    points = np.column_stack([world_xy, np.zeros(len(world_xy))])
+    pixels, valid = rig.camera.project(rotation.inv().apply(points - centre))
+    assert valid.all()
+    return pixels
+
+
+def outline_mask(rig, pose, corners_world: np.ndarray, grow_px: int) -> np.ndarray:
+    """Pixels inside the image of the floor polygon ``corners_world`` (its edges curve in a fisheye), grown by
+    ``grow_px`` (negative: shrunk)."""
+    edges = np.concatenate(
+        [
+            np.linspace(a, b, 60, endpoint=False)
+            for a, b in zip(corners_world, np.roll(corners_world, -1, axis=0), strict=True)
+        ]
+    )
+    mask = np.zeros((rig.camera.height, rig.camera.width), np.uint8)
+    cv2.fillPoly(mask, [np.rint(world_to_pixels(rig, pose, edges)).astype(np.int32)], 1)
+    kernel = np.ones((2 * abs(grow_px) + 1,) * 2, np.uint8)
+    return (cv2.dilate(mask, kernel) if grow_px > 0 else cv2.erode(mask, kernel)).astype(bool)
+
+
+def sheet_truth(time_s: float) -> tuple[np.ndarray, float]:
+    """SHEET's centre (2,) and heading at ``time_s``, from its constant velocity and turn rate."""
+    return np.array([0.80, -0.02]) + np.array([0.04, 0.12]) * time_s, 0.3 + 0.4 * time_s
+
+
+def sheet_corners(time_s: float) -> np.ndarray:
+    centre, yaw = sheet_truth(time_s)
+    half = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]]) * np.array([0.06, 0.0425])
+    return centre + half @ np.array([[np.cos(yaw), np.sin(yaw)], [-np.sin(yaw), np.cos(yaw)]])
+
+
+def test_without_disturbances_the_image_is_unchanged(floor):
+    rig = RIGS["t265"]
+    plain = FloorRenderer(rig, floor)
+    none = Disturbances()
+    idle = FloorRenderer(
+        rig, floor, sheets=none.place_sheets(np.arange(3.0), np.zeros((3, 3))), glints=none.place_glints()
+    )
+    out_of_sight = FloorRenderer(rig, floor, sheets=(MovingSheet((0.1, 0.07), (40.0, 0.0), 0.0, (0.0, 0.0), 0.0),))
+    for poses, times in (([0.1, 0.05, 0.2], 2.0), ([[0.1, 0.05, 0.2], [0.11, 0.05, 0.21]], [2.0, 2.1])):
+        expected = plain.render(poses, frame_seed=3)
+        assert np.array_equal(idle.render(poses, frame_seed=3, times_s=times), expected)
+        assert np.array_equal(out_of_sight.render(poses, frame_seed=3, times_s=times), expected)
+
+
+def test_a_printed_sheet_covers_its_area_exactly():
+    printed = print_sheet((0.1234, 0.0871), 1e-3, seed=2)
+    assert printed[..., 1].sum() * 1e-6 == pytest.approx(0.1234 * 0.0871, rel=1e-6)
+    assert printed[..., 1].max() == 1.0 and (printed[..., 0] <= 255 * printed[..., 1] + 1e-3).all()
+    assert np.array_equal(print_sheet((0.1234, 0.0871), 1e-3, seed=2), printed)
+
+
+def test_a_sheet_lies_where_its_trajectory_puts_it(floor):
+    """With the sheet, the image differs from the bare floor's inside the sheet's projected outline, nowhere else."""
+    rig = RIGS["t265"]
+    bare = FloorRenderer(rig, floor, QUIET)
+    covered = FloorRenderer(rig, floor, QUIET, sheets=(SHEET,))
+    for time_s, pose in zip(SHEET_TIMES, SHEET_POSES, strict=True):
+        changed = covered.render(pose, times_s=time_s) != bare.render(pose, times_s=time_s)
+        assert not changed[~outline_mask(rig, pose, sheet_corners(time_s), 3)].any()
+        assert changed[outline_mask(rig, pose, sheet_corners(time_s), -2)].mean() > 0.95
+
+
+def test_what_is_printed_on_a_sheet_moves_with_the_sheet(floor):
+    """Each pixel on the sheet at the second time shows the print seen where the sheet's motion took that print
+    from at the first time, not what lay there on the floor."""
+    rig = RIGS["t265"]
+    renderer = FloorRenderer(rig, floor, QUIET, sheets=(SHEET,))
+    (t1, t2), (pose1, pose2) = SHEET_TIMES, SHEET_POSES
+    first, second = (renderer.render(pose, times_s=t) for pose, t in zip((pose1, pose2), (t1, t2), strict=True))
+    rows, cols = np.nonzero(outline_mask(rig, pose2, sheet_corners(t2), -4))
+    x, y, yaw = pose2
+    base = renderer.floor_points[rows, cols]
+    seen = np.column_stack(
+        [
+            x + np.cos(yaw) * base[:, 0] - np.sin(yaw) * base[:, 1],
+            y + np.sin(yaw) * base[:, 0] + np.cos(yaw) * base[:, 1],
+        ]
+    )
+    (centre1, yaw1), (centre2, yaw2) = sheet_truth(t1), sheet_truth(t2)
+    turn = yaw1 - yaw2
+    carried = centre1 + (seen - centre2) @ np.array([[np.cos(turn), np.sin(turn)], [-np.sin(turn), np.cos(turn)]])
+
+    def difference(world_at_t1):
+        pixels = world_to_pixels(rig, pose1, world_at_t1).astype(np.float32)
+        before = cv2.remap(first.astype(np.float32), pixels[:, :1], pixels[:, 1:], cv2.INTER_LINEAR)[:, 0]
+        return np.median(np.abs(before - second[rows, cols]))
+
+    assert difference(carried) < 3.0
+    assert difference(seen) > 15.0  # had the print stayed on the floor
+
+
+def patch_mask(rig) -> np.ndarray:
+    """Pixels showing the ortho-GPI's floor patch."""
+    x_min, x_max, y_min, y_max = GPI_PATCH_M
+    return outline_mask(rig, np.zeros(3), np.array([[x_min, y_min], [x_max, y_min], [x_max, y_max], [x_min, y_max]]), 0)
+
+
+def test_a_glint_stays_put_in_the_image_inside_the_floor_patch(floor):
+    """The glint adds the same light at the same pixels whatever the pose; its centre is where the camera sees the
+    floor point it is centred on, inside the ortho-GPI's floor patch."""
+    rig = RIGS["t265"]
+    glint = Glint((0.78, 0.03), radius_m=0.03, peak=60.0, flicker=0.0, seed=1)
+    bare, lit = FloorRenderer(rig, floor, QUIET), FloorRenderer(rig, floor, QUIET, glints=(glint,))
+    poses = ([0.0, 0.0, 0.0], [0.05, 0.01, 0.04])
+    floors = [bare.render(pose).astype(float) for pose in poses]
+    added = [lit.render(pose).astype(float) - floor_image for pose, floor_image in zip(poses, floors, strict=True)]
+    assert np.median(np.abs(floors[0] - floors[1])[patch_mask(rig)]) > 10  # the floor moved
+    unclipped = (floors[0] + added[0] < 255) & (floors[1] + added[1] < 255)
+    assert np.abs(added[0] - added[1])[unclipped].max() <= 1.0
+    centre = world_to_pixels(rig, np.zeros(3), np.array([[0.78, 0.03]]))[0]
+    assert added[0][tuple(np.rint(centre[::-1]).astype(int))] >= 0.9 * 60.0
+    lit_pixels = added[0] > 2.0
+    assert lit_pixels.sum() > 500 and not (lit_pixels & ~patch_mask(rig)).any()
+
+
+def test_features_on_a_glint_stand_still_while_the_floor_flows(floor):
+    """KLT on two frames 1 cm apart: the glint's corners keep their place, the floor's move by pixels."""
+    rig = RIGS["t265"]
+    glint = Glint((0.78, 0.03), radius_m=0.03)
+    lit = FloorRenderer(rig, floor, glints=(glint,))
+    first, second = lit.render([0.0, 0.0, 0.0], frame_seed=1), lit.render([0.01, 0.0, 0.0], frame_seed=2)
+    on_glint = FloorRenderer(rig, floor, QUIET, glints=(glint,)).render(np.zeros(3)).astype(float) - FloorRenderer(
+        rig, floor, QUIET
+    ).render(np.zeros(3))
+    glint_mask = on_glint > 20.0
+    floor_mask = patch_mask(rig) & ~cv2.dilate(glint_mask.astype(np.uint8), np.ones((15, 15), np.uint8)).astype(bool)
+
+    def flow(mask):
+        corners = cv2.goodFeaturesToTrack(first, 40, 0.01, 3, mask=mask.astype(np.uint8))
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(first, second, corners, None, winSize=(15, 15), maxLevel=3)
+        return np.linalg.norm((moved - corners).reshape(-1, 2)[status.ravel() == 1], axis=1)
+
+    assert np.median(flow(glint_mask)) < 0.5
+    assert np.median(flow(floor_mask)) > 3.0

@@ -67,7 +67,7 @@ def make_floor(
     surface *= _low_frequency(shape, texel, cell_m=2.0, rng=rng, amplitude=0.12)  # lighting
     image = np.clip(surface, 0, 255).astype(np.uint8)
     return FloorTexture(
-        _mip_pyramid(image), (x_min + 0.5 * texel, y_min + 0.5 * texel), texel, kind, kind == "industrial"
+        mip_pyramid(image), (x_min + 0.5 * texel, y_min + 0.5 * texel), texel, kind, kind == "industrial"
     )
 
 
@@ -179,9 +179,12 @@ def _industrial(grain: np.ndarray, texel: float, rng: np.random.Generator) -> np
     return surface + cv2.GaussianBlur(scratches, (0, 0), 0.7)
 
 
-def _mip_pyramid(image: np.ndarray, smallest: int = 8) -> tuple[np.ndarray, ...]:
-    """Level k halves level k-1 (``cv2.pyrDown``) until a side would drop below ``smallest`` texels."""
+def mip_pyramid(image: np.ndarray, smallest: int = 8) -> tuple[np.ndarray, ...]:
+    """Level k halves level k-1 (``cv2.pyrDown``) until a side would drop below ``smallest`` texels.
+
+    ``image`` is (H, W) or (H, W, channels); each channel is filtered on its own.
+    """
     levels = [image]
-    while min(levels[-1].shape) // 2 >= smallest:
+    while min(levels[-1].shape[:2]) // 2 >= smallest:
         levels.append(cv2.pyrDown(levels[-1]))
     return tuple(levels)

@@ -1,7 +1,8 @@
 """Recordings of the simulated rigs, written as ROS bags the way a real robot's would be.
 
-A ``Preset`` names a rig, a path, a floor and a seed. ``simulate`` drives the path, renders every
-camera frame and writes one bag holding:
+A ``Preset`` names a rig, a path, a floor and a seed, and what disturbs the camera's view of the floor
+(``gpo.sim.render.Disturbances``: sheets dragged across it, glints). ``simulate`` drives the path,
+renders every camera frame and writes one bag holding:
 
 - the camera images (``sensor_msgs/Image``, mono8) and ``camera_info`` on the rig's topics;
 - ``/mocap/base_link`` (``geometry_msgs/PoseStamped``, 120 Hz): ground truth of ``base_link`` in
@@ -21,7 +22,7 @@ from __future__ import annotations
 
 import hashlib
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import cv2
@@ -33,7 +34,7 @@ from gpo.bag import BagWriter
 from gpo.rig import Rig
 from gpo.sim.floors import make_floor
 from gpo.sim.motion import T265_DRIFT, MotionPlan, named_plan, tracking_odometry
-from gpo.sim.render import FloorRenderer
+from gpo.sim.render import Disturbances, FloorRenderer
 from gpo.sim.rigs import RIGS
 from gpo.targets import Chessboard, FloorBoard
 
@@ -49,6 +50,7 @@ class Preset:
     """A recording: ``rig`` (``t265`` or ``downward``), a named ``path`` of ``gpo.sim.motion``, a floor kind.
 
     ``exposure_s`` > 0 blurs each frame over that exposure (``blur_samples`` poses averaged).
+    ``disturbances`` put moving sheets and glints in the camera's view (none by default).
     """
 
     rig: str
@@ -58,14 +60,22 @@ class Preset:
     description: str
     exposure_s: float = 0.0
     blur_samples: int = 3
+    disturbances: Disturbances = field(default_factory=Disturbances)
 
 
 PRESETS = {
     "sample": Preset("t265", "sample", "raised", 1, "the fisheye rig on a raised floor, ~13 s: the notebooks' sample"),
     "test": Preset("t265", "test", "raised", 2, "the fisheye rig, ~3 s: for the tests"),
     **{
-        f"short{k}": Preset("t265", f"short{k}", "raised", 10 + k, f"the fisheye rig, 2-5 m path {k} (Test{k})")
-        for k in (1, 2, 3)
+        f"short{k}": Preset(
+            "t265",
+            f"short{k}",
+            "raised",
+            10 + k,
+            f"the fisheye rig, 2-5 m path {k} (Test{k}), with sheets dragged across the floor and a lamp's glint",
+            disturbances=Disturbances(sheets=sheets, glints=1, seed=10 + k),
+        )
+        for k, sheets in ((1, 5), (2, 8), (3, 7))  # a sheet in the GPI's floor patch in 40-50 % of the frames
     },
     **{
         f"long{k}": Preset(
@@ -104,8 +114,15 @@ def simulate(name: str, out, format: str = "ros1", progress: bool = True) -> Pat
     floor = make_floor(
         chosen.floor, floor_extent(plan, rig, FLOOR_MARGIN_M[chosen.rig]), TEXEL_M[chosen.rig], chosen.seed
     )
-    renderer = FloorRenderer(rig, floor)
     frame_times = np.arange(0.0, plan.duration_s, 1.0 / rig.rate_hz)
+    path = plan.sample(frame_times)
+    disturbances = chosen.disturbances
+    renderer = FloorRenderer(
+        rig,
+        floor,
+        sheets=disturbances.place_sheets(frame_times, np.column_stack([path.x, path.y, path.yaw])),
+        glints=disturbances.place_glints(),
+    )
     with BagWriter(out, format) as bag:
         _write_static_tree(bag, rig)
         bag.add_trajectory(GROUND_TRUTH_TOPIC, plan.ground_truth(120.0, START_NS), msgtype="pose")
@@ -114,21 +131,22 @@ def simulate(name: str, out, format: str = "ros1", progress: bool = True) -> Pat
             bag.add_trajectory(ODOMETRY_TOPIC, odometry)
         for index, time_s in enumerate(tqdm(frame_times, desc=f"rendering {name}", disable=not progress)):
             stamp_ns = START_NS + round(time_s * 1e9)
-            image = renderer.render(_exposure_poses(plan, time_s, chosen), frame_seed=(chosen.seed, index))
+            times, poses = _exposure(plan, time_s, chosen)
+            image = renderer.render(poses, frame_seed=(chosen.seed, index), times_s=times)
             bag.add_image(rig.image_topic, stamp_ns, image, rig.frame_id)
             bag.add_camera_info(rig.info_topic, stamp_ns, rig.camera, rig.frame_id)
     return Path(out)
 
 
-def _exposure_poses(plan: MotionPlan, time_s: float, chosen: Preset) -> np.ndarray:
-    """Poses (K, 3) over the exposure centred on ``time_s``, kept inside the plan."""
+def _exposure(plan: MotionPlan, time_s: float, chosen: Preset) -> tuple[np.ndarray, np.ndarray]:
+    """Times (K,) seconds and poses (K, 3) over the exposure centred on ``time_s``, kept inside the plan."""
     if chosen.exposure_s <= 0:
         times = np.array([time_s])
     else:
         half = 0.5 * chosen.exposure_s
         times = np.clip(np.linspace(time_s - half, time_s + half, chosen.blur_samples), 0.0, plan.duration_s)
     state = plan.sample(times)
-    return np.column_stack([state.x, state.y, state.yaw])
+    return times, np.column_stack([state.x, state.y, state.yaw])
 
 
 def _write_static_tree(bag: BagWriter, rig: Rig) -> None:

@@ -121,5 +121,3 @@ def format_table1(rows) -> str:
             f"{row.single_side_rms_mm:>18.3f}{row.single_area_rms_mm2:>7.2f}"
         )
     return "\n".join(lines)
-
-
