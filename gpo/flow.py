@@ -12,7 +12,7 @@ and highlights make, and the mean, for the first paper's comparison (its Table 3
 
 Each frame gets a ``FlowQuality``; a frame that cannot be measured is flagged with the reason, never turned into
 a wrong vector: too few corners (a floor without texture), too few tracks kept (a bad frame, motion blur),
-vectors that disagree (no consensus), or a motion near the pyramid's reach.
+vectors that disagree (no consensus), or a change of motion near the pyramid's reach (too fast).
 
 Each floor image is first scaled to a common mean and contrast (exposure flicker breaks Lucas-Kanade's constant
 brightness). Pixels (u, v): u right, v down, as OpenCV.
@@ -212,8 +212,9 @@ class FloorFlow:
         flag = None
         if quality.inlier_ratio < p.min_inlier_ratio:
             flag = f"no consensus: {quality.inliers} of {quality.kept} vectors near the median"
-        elif np.hypot(*median) > 0.8 * p.reach_px:
-            flag = f"motion {np.hypot(*median):.0f} px near the pyramid's reach {p.reach_px:.0f} px: too fast"
+        elif np.hypot(*(median - prediction)) > 0.8 * p.reach_px:
+            change = np.hypot(*(median - prediction))
+            flag = f"too fast: the motion changed by {change:.0f} px, near the pyramid's reach {p.reach_px:.0f} px"
         if flag:
             return _flagged(start, end, len(points), flag, inlier, spread), end
         measurement = FlowMeasurement(start, end, median, vectors.mean(axis=0), inlier, quality)

@@ -100,3 +100,10 @@ def test_bad_images_and_parameters_are_refused():
         KLTParameters(window_px=20)
     with pytest.raises(FlowError, match="mask shape"):
         FloorFlow(mask=np.ones((10, 10), bool)).track(np.zeros((50, 50), np.uint8))
+
+
+def test_a_motion_beyond_the_pyramids_reach_is_flagged_too_fast():
+    image = cv2.GaussianBlur(_texture(), (0, 0), 3.0)
+    measurement = _track(image, _moved(image, 0.0, 3.2), window_px=7, pyramid_levels=0)  # reach 3.5 px
+    assert measurement.quality.flag.startswith("too fast")
+    assert np.isnan(measurement.median).all()
