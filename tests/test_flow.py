@@ -107,3 +107,20 @@ def test_a_motion_beyond_the_pyramids_reach_is_flagged_too_fast():
     measurement = _track(image, _moved(image, 0.0, 3.2), window_px=7, pyramid_levels=0)  # reach 3.5 px
     assert measurement.quality.flag.startswith("too fast")
     assert np.isnan(measurement.median).all()
+
+
+def _rotation_ratio(flat_field_px: int) -> float:
+    """Measured over true rotation of a low-contrast floor turning 1.2 degrees under a brightness gradient fixed to
+    the camera (half as bright on the left as on the right, like strong vignetting)."""
+    image = cv2.normalize(_texture(size=300, seed=3), None, 110, 150, cv2.NORM_MINMAX)
+    angle = np.radians(1.2)
+    across, down = np.linspace(0.5, 1.0, 300, dtype=np.float32), np.linspace(1.0, 0.85, 300, dtype=np.float32)
+    gradient = down[:, None] * across[None, :]
+    first, second = (np.clip(a * gradient, 0, 255).astype(np.uint8) for a in (image, _moved(image, 0, 0, angle)))
+    measurement = _track(first, second, flat_field_px=flat_field_px, max_corners=300, min_distance_px=5)
+    return -increment_from_point_pairs(measurement.start, measurement.end)[2] / angle
+
+
+def test_the_flat_field_removes_the_rotation_bias_of_a_fixed_brightness_gradient():
+    assert _rotation_ratio(41) == pytest.approx(1.0, abs=0.004)
+    assert _rotation_ratio(0) < 0.99  # without it, the turn reads more than 1 % short
