@@ -227,3 +227,157 @@ def draw_floor_image(image, floor, ax=None, mount=None, axes_length: float = 0.1
     ax.set_xlabel("y, left [m]")
     ax.set_ylabel("x, forward [m]")
     return ax
+
+
+FLOW_COLOURS = {"inlier": "tab:green", "outlier": "tab:red", "median": "tab:blue", "mean": "tab:orange"}
+
+
+def draw_flow_vectors(image, measurement, ax=None, scale: float = 1.0) -> plt.Axes:
+    """A floor image with the kept tracks of a ``gpo.flow.FlowMeasurement``: each an arrow from where it started,
+    ``scale`` times its length; inliers (near the median vector) and outliers in two colours (``FLOW_COLOURS``)."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 5))
+    ax.imshow(image, cmap="gray", vmin=0, vmax=255)
+    start, vectors = measurement.start, measurement.vectors
+    for chosen, kind in ((measurement.inlier, "inlier"), (~measurement.inlier, "outlier")):
+        if chosen.any():
+            ax.quiver(
+                start[chosen, 0],
+                start[chosen, 1],
+                vectors[chosen, 0],
+                vectors[chosen, 1],
+                angles="xy",
+                scale_units="xy",
+                scale=1.0 / scale,
+                width=0.005,
+                color=FLOW_COLOURS[kind],
+                label=f"{int(chosen.sum())} {kind}{'s' if chosen.sum() != 1 else ''}",
+            )
+    if len(start):
+        ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
+    ax.set_xlim(-0.5, image.shape[1] - 0.5)
+    ax.set_ylim(image.shape[0] - 0.5, -0.5)
+    ax.set_axis_off()
+    return ax
+
+
+def draw_flow_scatter(measurement, ax=None) -> plt.Axes:
+    """The first paper's Fig. 17: every kept track's motion vector (du, dv) pixels as a point, inliers and outliers
+    apart, with the median vector and the mean vector marked. v grows downwards, as in the image."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 5))
+    vectors = measurement.vectors
+    for chosen, kind in ((measurement.inlier, "inlier"), (~measurement.inlier, "outlier")):
+        if chosen.any():
+            ax.plot(*vectors[chosen].T, ".", ms=5, color=FLOW_COLOURS[kind], label=f"{kind}s")
+    if np.isfinite(measurement.median).all():
+        for name, marker in (("median", "*"), ("mean", "X")):
+            du, dv = getattr(measurement, name)
+            ax.plot(du, dv, marker, ms=14, mec="k", color=FLOW_COLOURS[name], label=f"{name} ({du:+.2f}, {dv:+.2f})")
+    ax.set_aspect("equal", adjustable="datalim")
+    if not ax.yaxis_inverted():
+        ax.invert_yaxis()
+    ax.grid(True, alpha=0.3)
+    ax.set_xlabel("du [px] (right)")
+    ax.set_ylabel("dv [px] (down)")
+    if len(vectors):
+        ax.legend(fontsize="small")
+    return ax
+
+
+def draw_heading_rate_ratio(wheelbase_m: float, rear_to_reference_m, ax=None, max_steering_deg: float = 60.0):
+    """Eq. (30)'s heading rate over the true one (``gpo.kinematics.paper_heading_rate_ratio``) against the steering
+    angle, one curve per reference point l_r in ``rear_to_reference_m`` (metres, a number or a sequence)."""
+    from gpo.kinematics import paper_heading_rate_ratio
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 4))
+    steering = np.radians(np.linspace(0.0, max_steering_deg, 321))
+    for lever in np.atleast_1d(rear_to_reference_m):
+        ratio = paper_heading_rate_ratio(steering, wheelbase_m, float(lever))
+        ax.plot(np.degrees(steering), ratio, label=f"$l_r$ = {lever:.2f} m ({lever / wheelbase_m:.2f} L)")
+    ax.axhline(1.0, color="k", lw=0.8, ls=":")
+    ax.set_xlabel(r"steering angle $\delta$ [deg]")
+    ax.set_ylabel("heading rate: eq. 30 / exact")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return ax
+
+
+def draw_bicycle(wheelbase_m: float, rear_to_reference_m: float, steering_rad: float, ax=None) -> plt.Axes:
+    """Top view of the first paper's bicycle model in base_link (x forward to the right, y left upwards): the rear
+    axle at the origin, the virtual front wheel a wheelbase L ahead turned by the steering angle delta and moving at
+    V, the reference point l_r ahead of the rear axle moving in the direction of the slip angle beta, and the turning
+    centre on the rear axle's line with the reference point's radius R (eqs. 28-29). ``steering_rad`` in (0, 80 deg]."""
+    from matplotlib.patches import Arc, Rectangle
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 6))
+    length, lever, delta = float(wheelbase_m), float(rear_to_reference_m), float(steering_rad)
+    beta = float(np.arctan(lever * np.tan(delta) / length))
+    centre = np.array([0.0, length / np.tan(delta)])
+    arrow = 0.45 * length
+    ax.add_patch(Rectangle((-0.2 * length, -0.22 * length), 1.4 * length, 0.44 * length, color="0.92", zorder=0))
+    wheel = 0.12 * length
+    ax.plot([-wheel, wheel], [0.0, 0.0], color="k", lw=6, solid_capstyle="butt")
+    ax.plot(
+        length + wheel * np.array([-np.cos(delta), np.cos(delta)]),
+        wheel * np.array([-np.sin(delta), np.sin(delta)]),
+        color="0.4",
+        lw=6,
+        solid_capstyle="butt",
+        alpha=0.6,
+    )
+    ax.plot([0.0, length], [0.0, 0.0], color="0.3", lw=1)
+    points = {
+        "rear axle (base_link)": (0.0, "k"),
+        "reference point": (lever, "tab:purple"),
+        "virtual front wheel": (length, "tab:blue"),
+    }
+    for name, (x, colour) in points.items():
+        ax.plot(x, 0.0, "o", color=colour, ms=7, zorder=3)
+        ax.annotate(
+            name,
+            (x, 0.0),
+            (0, 14 if x == lever else -20),
+            textcoords="offset points",
+            ha="center",
+            color=colour,
+            fontsize="small",
+        )
+    for x, (dx, dy), colour, name in (
+        (length, (np.cos(delta), np.sin(delta)), "tab:blue", "$V$"),
+        (lever, (np.cos(beta), np.sin(beta)), "tab:purple", "$V_r$"),
+    ):
+        ax.annotate(
+            "", (x + arrow * dx, arrow * dy), (x, 0.0), arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 2}
+        )
+        ax.text(x + 1.08 * arrow * dx, 1.08 * arrow * dy, name, color=colour, fontsize="large")
+    for x, angle, name, colour in ((length, delta, r"$\delta$", "tab:blue"), (lever, beta, r"$\beta$", "tab:purple")):
+        radius = 0.5 * arrow
+        ax.add_patch(Arc((x, 0.0), 2 * radius, 2 * radius, theta1=0.0, theta2=np.degrees(angle), color=colour))
+        ax.text(
+            x + 1.1 * radius * np.cos(angle / 2),
+            1.1 * radius * np.sin(angle / 2),
+            name,
+            color=colour,
+            fontsize="small",
+            va="center",
+        )
+    ax.plot([0.0, 1.2 * length], [0.0, 0.0], color="0.6", lw=0.8, ls=":")
+    for x, colour in ((0.0, "k"), (lever, "tab:purple"), (length, "tab:blue")):
+        ax.plot([centre[0], x], [centre[1], 0.0], color=colour, lw=0.8, ls="--")
+    ax.plot(*centre, "+", ms=12, color="k")
+    ax.annotate("turning centre", centre, (6, 6), textcoords="offset points", fontsize="small")
+    middle = (centre + np.array([lever, 0.0])) / 2
+    ax.text(middle[0] + 0.03 * length, middle[1], "$R$", color="tab:purple", fontsize="large")
+    for x0, x1, y, name in ((0.0, length, -0.38 * length, "$L$"), (0.0, lever, -0.53 * length, "$l_r$")):
+        if x1 > x0:
+            ax.annotate("", (x1, y), (x0, y), arrowprops={"arrowstyle": "<->", "color": "0.3"})
+            ax.text((x0 + x1) / 2, y - 0.02 * length, name, ha="center", va="top")
+    ax.set_aspect("equal")
+    ax.set_xlim(-0.45 * length, 1.7 * length)
+    ax.set_ylim(-0.68 * length, centre[1] + 0.2 * length)
+    ax.set_xlabel("x forward [m]")
+    ax.set_ylabel("y left [m]")
+    return ax

@@ -13,6 +13,7 @@ from gpo.bag import Recording
 from gpo.calibrate import CalibrationError, calibrate_corners
 from gpo.camera import EUCM, T265_LIKE
 from gpo.cubemap import Cubemap, default_face_size
+from gpo.flow import FloorFlow, KLTParameters
 from gpo.ground import (
     FloorImage,
     GroundImageError,
@@ -22,8 +23,25 @@ from gpo.ground import (
     ortho_rectify,
     route_difference,
 )
+from gpo.kinematics import (
+    PaperBicycle,
+    arc_increment,
+    between,
+    exact_velocities,
+    integrate,
+    paper_heading_rate_ratio,
+)
 from gpo.mount import floor_angles
-from gpo.plots import draw_floor_image, draw_residuals, draw_room_in_image, draw_view_errors, field_of_view_text
+from gpo.plots import (
+    draw_floor_image,
+    draw_flow_scatter,
+    draw_flow_vectors,
+    draw_heading_rate_ratio,
+    draw_residuals,
+    draw_room_in_image,
+    draw_view_errors,
+    field_of_view_text,
+)
 from gpo.rig import CameraMount
 
 
@@ -325,3 +343,186 @@ def analytic_mount_panel(fisheye_image, camera, mount: CameraMount, reference, p
         plt.show()
 
     return widgets.VBox([widgets.HBox(list(controls.values())), widgets.interactive_output(redraw, controls)])
+
+
+def klt_flow_panel(floor_images, mask=None, parameters: KLTParameters | None = None) -> widgets.VBox:
+    """The KLT tracker's window size, pyramid levels, number of corners and quality level on a run of floor images.
+
+    ``floor_images``: two or more consecutive floor images (H, W) uint8 of one size; ``mask``: their valid pixels
+    (``FloorFlow``'s); ``parameters``: the ``KLTParameters`` the sliders start from (default: the package's). On
+    each release a fresh ``FloorFlow`` tracks the images from the first up to the chosen frame, so that each search
+    starts from the previous motion as in odometry, and the last pair is drawn: the earlier image, the later one
+    with the kept motion vectors (inliers and outliers in two colours), and the vectors' (du, dv) scatter with the
+    median and the mean (the first paper's Fig. 17); one line reads out the frame's quality record.
+    """
+    images = list(floor_images)
+    if len(images) < 2:
+        raise ValueError(f"klt_flow_panel needs two or more consecutive floor images, got {len(images)}")
+    base = parameters or KLTParameters()
+    style = {"description_width": "initial"}
+    controls = {
+        "window_px": widgets.IntSlider(
+            value=base.window_px, min=5, max=51, step=2, description="window [px]", continuous_update=False, style=style
+        ),
+        "pyramid_levels": widgets.IntSlider(
+            value=base.pyramid_levels, min=0, max=6, description="pyramid levels", continuous_update=False, style=style
+        ),
+        "max_corners": widgets.IntSlider(
+            value=base.max_corners,
+            min=5,
+            max=400,
+            step=5,
+            description="max corners",
+            continuous_update=False,
+            style=style,
+        ),
+        "quality_level": widgets.FloatLogSlider(
+            value=base.quality_level,
+            base=10,
+            min=-3,
+            max=-0.5,
+            step=0.1,
+            description="quality level",
+            readout_format=".3f",
+            continuous_update=False,
+            style=style,
+        ),
+        "frame": widgets.IntSlider(
+            value=len(images) - 1,
+            min=1,
+            max=len(images) - 1,
+            description="frame",
+            continuous_update=False,
+            disabled=len(images) == 2,
+            style=style,
+        ),
+    }
+
+    def redraw(window_px: int, pyramid_levels: int, max_corners: int, quality_level: float, frame: int) -> None:
+        chosen = dataclasses.replace(
+            base,
+            window_px=window_px,
+            pyramid_levels=pyramid_levels,
+            max_corners=max_corners,
+            quality_level=quality_level,
+        )
+        flow = FloorFlow(chosen, mask)
+        for image in images[: frame + 1]:
+            measurement = flow.track(image)
+        plt.close("all")
+        _, (left, middle, right) = plt.subplots(1, 3, figsize=(14, 4.8), gridspec_kw={"width_ratios": [1, 1, 1.1]})
+        left.imshow(images[frame - 1], cmap="gray", vmin=0, vmax=255)
+        left.set_title(f"frame {frame - 1}")
+        left.set_axis_off()
+        draw_flow_vectors(images[frame], measurement, ax=middle)
+        middle.set_title(f"frame {frame}: the kept tracks")
+        draw_flow_scatter(measurement, ax=right)
+        right.set_title("motion vectors (Fig. 17)")
+        print(flow_quality_text(measurement, chosen))
+        plt.show()
+
+    sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
+    return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+def flow_quality_text(measurement, parameters: KLTParameters | None = None) -> str:
+    """One line about a ``FlowMeasurement``: its counts, its spread and its median and mean vectors, or its flag;
+    with ``parameters``, also the pyramid's reach."""
+    quality = measurement.quality
+    reach = "" if parameters is None else f"; reach {parameters.reach_px:.0f} px"
+    if not quality.ok:
+        return f"flagged: {quality.flag} ({quality.tracked} tracked, {quality.kept} kept{reach})"
+    (mu, mv), (au, av) = measurement.median, measurement.mean
+    return (
+        f"{quality.tracked} tracked, {quality.kept} kept, {quality.inliers} inliers ({quality.inlier_ratio:.0%}), "
+        f"spread {quality.spread_px:.2f} px; median ({mu:+.2f}, {mv:+.2f}) px, mean ({au:+.2f}, {av:+.2f}) px{reach}"
+    )
+
+
+def constant_steering_paths(
+    wheelbase_m: float,
+    rear_to_reference_m: float,
+    speed_mps: float,
+    steering_rad: float,
+    duration_s: float,
+    rate_hz: float = 30.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """base_link's poses (N + 1, 3) over ``duration_s`` of a drive whose virtual front wheel (L ahead of the rear
+    axle) moves at ``speed_mps`` in the constant direction ``steering_rad`` in base_link: the exact motion (circular
+    arcs, ``gpo.kinematics.exact_velocities`` and ``arc_increment``) and what the first paper's model
+    (``PaperBicycle(wheelbase_m, rear_to_reference_m)``, eqs. 25-34) makes of it, fed each frame (``rate_hz``) with
+    the front wheel's displacement as the floor image shows it."""
+    dt = 1.0 / rate_hz
+    frames = max(1, round(duration_s * rate_hz))
+    v, omega = exact_velocities(speed_mps, steering_rad, wheelbase_m)
+    increment = arc_increment(v, omega, dt)
+    exact = integrate(np.tile(increment, (frames, 1)))
+    seen_at = between(increment, [wheelbase_m, 0.0, 0.0])[:2]  # the floor point under the wheel, at the frame's end
+    displacement = np.array([wheelbase_m, 0.0]) - seen_at
+    model = PaperBicycle(wheelbase_m, rear_to_reference_m)
+    paper = [np.zeros(3)]
+    for _ in range(frames):
+        paper.append(model.step(paper[-1], displacement, dt))
+    return exact, np.array(paper)
+
+
+def bicycle_panel(wheelbase_m: float = 0.8, rear_to_reference_m: float = 0.8, rate_hz: float = 30.0) -> widgets.VBox:
+    """The first paper's bicycle model against the exact kinematics: the wheelbase L, the reference point l_r, a
+    constant steering angle delta, the front wheel's speed V and how long it drives.
+
+    Left: eq. 30's heading rate over the true one against delta for this L and l_r (``draw_heading_rate_ratio``),
+    the chosen delta marked. Right: the path of base_link under constant steering, exact and as the paper's model
+    integrates it frame by frame at ``rate_hz`` (``constant_steering_paths``). One line says how far apart they end.
+    """
+    style = {"description_width": "initial"}
+    length = _slider("L [m]", wheelbase_m, 0.2, 2.0, 0.05)
+    lever = _slider("l_r [m]", rear_to_reference_m, 0.0, wheelbase_m, 0.01)
+    controls = {
+        "wheelbase_m": length,
+        "rear_to_reference_m": lever,
+        "steering_deg": _slider("delta [deg]", 20.0, 0.0, 60.0, 1.0),
+        "speed_mps": _slider("V [m/s]", 0.5, 0.05, 2.0, 0.05),
+        "duration_s": _slider("time [s]", 5.0, 0.5, 20.0, 0.5),
+    }
+    for control in controls.values():
+        control.style = style
+    controls["steering_deg"].readout_format = ".0f"
+
+    def follow_wheelbase(change) -> None:  # l_r lies between the rear axle and the front wheel
+        lever.max = change["new"]
+
+    length.observe(follow_wheelbase, names="value")  # before interactive_output's own observer: l_r is clamped first
+
+    def redraw(wheelbase_m, rear_to_reference_m, steering_deg, speed_mps, duration_s) -> None:
+        rear_to_reference_m = min(rear_to_reference_m, wheelbase_m)
+        steering = math.radians(steering_deg)
+        exact, paper = constant_steering_paths(
+            wheelbase_m, rear_to_reference_m, speed_mps, steering, duration_s, rate_hz
+        )
+        ratio = float(paper_heading_rate_ratio(steering, wheelbase_m, rear_to_reference_m))
+        plt.close("all")
+        _, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8), gridspec_kw={"width_ratios": [1, 1.1]})
+        draw_heading_rate_ratio(wheelbase_m, rear_to_reference_m, ax=left)
+        left.plot(steering_deg, ratio, "o", color="tab:red")
+        left.set_title(f"L = {wheelbase_m:.2f} m, l_r = {rear_to_reference_m:.2f} m")
+        for name, poses, line in (("exact", exact, "-"), ("the paper's model", paper, "--")):
+            right.plot(poses[:, 0], poses[:, 1], line, label=name)
+            right.plot(*poses[-1, :2], "o", color=right.lines[-1].get_color())
+        right.plot(0.0, 0.0, "go", label="start")
+        right.set_aspect("equal", adjustable="datalim")
+        right.set_xlabel("x [m]")
+        right.set_ylabel("y [m]")
+        right.grid(True, alpha=0.3)
+        right.legend(fontsize="small")
+        right.set_title(f"base_link over {duration_s:.1f} s, delta = {steering_deg:.0f} deg, V = {speed_mps:.2f} m/s")
+        apart = float(np.hypot(*(paper[-1, :2] - exact[-1, :2])))
+        turned = math.degrees(paper[-1, 2] - exact[-1, 2])
+        chord = -speed_mps * math.cos(steering) / rate_hz / (2.0 * wheelbase_m)
+        print(
+            f"eq. 30 turns {ratio:.3f}x as fast as the robot, eq. 26's chord {100 * chord:+.2f} % a frame at "
+            f"{rate_hz:.0f} Hz; the paper's model ends {apart:.3f} m from the exact path, heading {turned:+.2f} deg"
+        )
+        plt.show()
+
+    sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
+    return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
