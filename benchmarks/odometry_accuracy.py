@@ -28,6 +28,8 @@ def measure(preset: str, method: str) -> dict:
     with Recording(bag) as recorded:
         truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
     result = run(bag, load_config().replace(method=method), progress=False)
+    if result.error:
+        raise RuntimeError(f"{preset}, {method}: the run stopped early {result.error}")
     error = final_error(result.trajectory, truth)
     summary = result.summary()
     return {

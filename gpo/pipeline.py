@@ -256,7 +256,7 @@ class FloorOdometer:
     def _virtual_wheel_at(self, wheelbase_m: float) -> PaperBicycle:
         """The configured bicycle model with its virtual front wheel moved to ``wheelbase_m``, l_r in proportion."""
         model = self.config.model
-        return PaperBicycle(wheelbase_m, wheelbase_m * model.rear_to_reference_m / model.wheelbase_m)
+        return PaperBicycle(wheelbase_m, min(wheelbase_m, wheelbase_m * model.rear_to_reference_m / model.wheelbase_m))
 
     def _rigid_increment(self, measurement: FlowMeasurement) -> np.ndarray | None:
         start, end = self._metres(measurement.start), self._metres(measurement.end)
