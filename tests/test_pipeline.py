@@ -47,6 +47,7 @@ def test_exact_and_rigid_follow_the_sample_with_its_reverse_and_spin(sample):
 def test_the_papers_model_reads_reverse_driving_as_forward(sample):
     path, _, truth = sample
     result = run(path, load_config().replace(method="gpo"), progress=False)
+    assert result.error is None and result.summary()["frames_measured"] == len(result.records) - 1
     position, _, distance = _final_error(result.trajectory, truth)
     assert position / distance > 0.1  # the sample's reverse leg and spin are read wrongly
 
