@@ -72,14 +72,14 @@ def parts(bag: Path, config, repeat: int) -> dict[str, float]:
 
 def peak_rss_mb(bag: Path, method: str) -> float:
     """Peak resident memory (MB) of a fresh process that runs the odometry on ``bag``."""
-    code = (
-        "import resource, sys\n"
+    code = (  # VmHWM, not ru_maxrss: the latter keeps the parent's peak across fork and exec
+        "from pathlib import Path\n"
         "from gpo.pipeline import load_config, run\n"
         f"run({str(bag)!r}, load_config().replace(method={method!r}), progress=False)\n"
-        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"
+        "print(next(line for line in Path('/proc/self/status').read_text().splitlines() if line.startswith('VmHWM')))\n"
     )
     output = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    return int(output.split()[-1]) / 1024
+    return int(output.split()[-2]) / 1024
 
 
 def repeated(source: Path, times: int, out: Path) -> Path:

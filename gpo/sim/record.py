@@ -181,18 +181,26 @@ def _source_fingerprint() -> str:
 
 
 def recording(name: str = "sample", format: str = "ros1", progress: bool = True) -> Path:
-    """The bag of preset ``name``: generated on first use, then read from the cache."""
+    """The bag of preset ``name``: generated on first use, then read from the cache.
+
+    Each process renders into a file of its own and renames it into place when complete, so processes that
+    want the same recording at once never read one another's half-written bag (the last rename wins; the
+    files are identical).
+    """
     chosen = preset(name)
     key = hashlib.sha256(repr((asdict(chosen), format, _source_fingerprint())).encode()).hexdigest()[:12]
     suffix = ".bag" if format == "ros1" else ""
     path = cache_dir() / f"{name}-{key}{suffix}"
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(path.name.replace(key, f"{key}-partial"))
+        partial = path.with_name(path.name.replace(key, f"{key}-partial-{os.getpid()}"))
         if partial.exists():
             _remove(partial)
         simulate(name, partial, format, progress)
-        partial.rename(path)
+        if path.exists():  # another process finished first
+            _remove(partial)
+        else:
+            partial.rename(path)
     return path
 
 
