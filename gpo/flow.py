@@ -11,8 +11,9 @@ The kept tracks' vectors give the frame's **median** motion vector, robust to th
 and highlights make, and the mean, for the first paper's comparison (its Table 3).
 
 Each frame gets a ``FlowQuality``; a frame that cannot be measured is flagged with the reason, never turned into
-a wrong vector: too few corners (a floor without texture), too few tracks kept (a bad frame, motion blur),
-vectors that disagree (no consensus), or a change of motion near the pyramid's reach (too fast).
+a wrong vector: no texture (a local contrast no higher than sensor noise), too few corners, too few tracks kept
+(a bad frame, motion blur), vectors that disagree (no consensus), or a change of motion near the pyramid's reach
+(too fast).
 
 Each floor image is first flat-fielded and scaled to a common mean and contrast (exposure flicker and vignetting
 break Lucas-Kanade's constant brightness). Pixels (u, v): u right, v down, as OpenCV.
@@ -27,6 +28,7 @@ import numpy as np
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
 GREY_MEAN, GREY_SPREAD = 128.0, 40.0  # every floor image is scaled to this mean and standard deviation
+CONTRAST_BOX_PX = 41  # the local mean for the texture measure when there is no flat field
 
 
 class FlowError(ValueError):
@@ -41,11 +43,15 @@ class KLTParameters:
     ``window_px`` (odd) and ``pyramid_levels``: ``cv2.calcOpticalFlowPyrLK``'s window and pyramid; the pyramid
     reaches a motion of about ``window_px / 2 * 2**pyramid_levels`` pixels. ``max_iterations`` and ``epsilon_px``:
     its stopping rule. ``forward_backward_px``: a track is kept when tracking it back ends this close to where it
-    started. ``redetect_below``: fewer tracks than this left, corners are detected afresh. ``min_tracks``: fewer
-    kept than this, the frame is flagged. ``inlier_px``: a vector is an inlier when it lies this close to the
-    median, or within three robust sigmas of it if they are wider. ``min_inlier_ratio``: below it the frame
-    is flagged (no consensus). ``flat_field_px``: each image is divided by its mean over boxes this wide before
-    tracking, which removes slow brightness gradients (0: not).
+    started. ``redetect_below``: fewer tracks than this left, corners are detected afresh. ``min_tracks`` and
+    ``min_kept_ratio``: fewer kept than this many, or than this share of the tracks followed, the frame is flagged.
+    ``inlier_px``: a track is an inlier when the frame's best rigid motion of the floor image (RANSAC over a
+    rotation, a shift and a scale) moves its start this close to its end. ``min_inlier_ratio``: a smaller share of
+    inliers flags the frame (no consensus: e.g. half the tracks on something that moves by itself).
+    ``min_texture_grey``: a floor image whose local contrast (the standard deviation of the image minus its
+    local mean, grey levels) is lower holds nothing but noise to track, and the frame is flagged.
+    ``flat_field_px``: each image is divided by its mean over boxes this wide before tracking, which removes slow
+    brightness gradients (0: not).
     """
 
     max_corners: int = 150
@@ -59,8 +65,10 @@ class KLTParameters:
     forward_backward_px: float = 0.5
     redetect_below: int = 60
     min_tracks: int = 12
+    min_kept_ratio: float = 0.3
     inlier_px: float = 1.0
-    min_inlier_ratio: float = 0.5
+    min_inlier_ratio: float = 0.6
+    min_texture_grey: float = 4.0
     flat_field_px: int = 41
 
     def __post_init__(self):
@@ -76,6 +84,8 @@ class KLTParameters:
             "forward_backward_px": self.forward_backward_px > 0,
             "redetect_below": self.redetect_below >= 0,
             "min_tracks": self.min_tracks >= 2,
+            "min_kept_ratio": 0 <= self.min_kept_ratio <= 1,
+            "min_texture_grey": self.min_texture_grey >= 0,
             "inlier_px": self.inlier_px > 0,
             "min_inlier_ratio": 0 <= self.min_inlier_ratio <= 1,
             "flat_field_px": self.flat_field_px == 0 or self.flat_field_px >= 3,
@@ -96,7 +106,8 @@ class FlowQuality:
     """How well a frame's motion was measured.
 
     ``tracked``: tracks followed from the previous frame; ``kept``: those passing the forward-backward check;
-    ``inliers``: kept vectors near the median; ``spread_px``: their robust standard deviation (1.4826 MAD),
+    ``inliers``: kept tracks that follow the frame's best rigid motion; ``spread_px``: the kept vectors' robust
+    standard deviation about the median (1.4826 MAD),
     pixels; ``flag``: None when the frame is measured, else why it is not.
     """
 
@@ -146,6 +157,7 @@ class FloorFlow:
     parameters: KLTParameters = field(default_factory=KLTParameters)
     mask: np.ndarray | None = None
     _image: np.ndarray | None = field(default=None, init=False, repr=False)
+    _texture: float = field(default=0.0, init=False, repr=False)
     _velocity: np.ndarray = field(default_factory=lambda: np.zeros(2, np.float32), init=False, repr=False)
     _predicted: bool = field(default=False, init=False, repr=False)
     _time_s: float = field(default=0.0, init=False, repr=False)
@@ -166,13 +178,17 @@ class FloorFlow:
         previous frame (a dropped frame doubles it); None counts frames instead.
         """
         self._check(image)
-        image = self._normalised(image)
-        previous, points = self._image, self._points
+        image, texture = self._normalised(image)
+        previous, points, previous_texture = self._image, self._points, self._texture
         elapsed = 1.0 if time_s is None or previous is None else time_s - self._time_s
-        self._image, self._time_s = image, 0.0 if time_s is None else time_s
+        self._image, self._texture, self._time_s = image, texture, 0.0 if time_s is None else time_s
         if previous is None:
             self._points = self._detect(image)
             return None
+        if min(texture, previous_texture) < self.parameters.min_texture_grey:
+            self._points, self._predicted = np.zeros((0, 2), np.float32), False
+            flag = f"no texture: local contrast {min(texture, previous_texture):.1f} grey levels"
+            return _flagged(self._points, self._points, 0, flag)
         if len(points) < self.parameters.redetect_below:
             points = self._detect(previous)
         prediction = (self._velocity * elapsed).astype(np.float32)
@@ -203,18 +219,21 @@ class FloorFlow:
         keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2
         keep &= self._inside(end)
         start, end = start[keep], end[keep]
-        if len(start) < p.min_tracks:
-            flag = f"too few tracks kept ({len(start)} of {len(points)} < {p.min_tracks}): a bad or blurred frame"
+        if len(start) < max(p.min_tracks, p.min_kept_ratio * len(points)):
+            flag = f"too few tracks kept ({len(start)} of {len(points)}): a bad or blurred frame"
             return _flagged(start, end, len(points), flag), end
         vectors = end - start
         median = np.median(vectors, axis=0)
         distance = np.hypot(*(vectors - median).T)
         spread = MAD_TO_SIGMA * float(np.median(distance))
-        inlier = distance <= max(p.inlier_px, 3.0 * spread)
+        _, inlier = cv2.estimateAffinePartial2D(
+            start, end, method=cv2.RANSAC, ransacReprojThreshold=p.inlier_px, maxIters=100, refineIters=0
+        )
+        inlier = np.zeros(len(start), bool) if inlier is None else inlier.ravel().astype(bool)
         quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread)
         flag = None
         if quality.inlier_ratio < p.min_inlier_ratio:
-            flag = f"no consensus: {quality.inliers} of {quality.kept} vectors near the median"
+            flag = f"no consensus: {quality.inliers} of {quality.kept} tracks follow one rigid motion"
         elif np.hypot(*(median - prediction)) > 0.8 * p.reach_px:
             change = np.hypot(*(median - prediction))
             flag = f"too fast: the motion changed by {change:.0f} px, near the pyramid's reach {p.reach_px:.0f} px"
@@ -234,21 +253,24 @@ class FloorFlow:
         elif size != self._size:
             raise FlowError(f"floor image size changed from {self._size} to {size} (width, height)")
 
-    def _normalised(self, image: np.ndarray) -> np.ndarray:
-        """``image`` divided by its local mean (a flat field) and scaled to one mean and contrast over the mask.
+    def _normalised(self, image: np.ndarray) -> tuple[np.ndarray, float]:
+        """``image`` divided by its local mean (a flat field) and scaled to one mean and contrast over the mask, and
+        its local contrast in grey levels (the standard deviation of the image minus its local mean).
 
         Lucas-Kanade assumes constant brightness. A few per cent of exposure flicker on a low-contrast floor pulls
         every track off, and a brightness gradient fixed to the camera (vignetting, the robot's own light) pulls
         each track towards standing still by an amount that varies across the image: on the simulated T265 rig
         it turned the rigid fit's rotations 1 % short, which the flat field removes.
         """
-        size = self.parameters.flat_field_px
+        size = self.parameters.flat_field_px or CONTRAST_BOX_PX
         floor = image.astype(np.float32)
-        if size:
-            floor /= np.maximum(cv2.blur(floor, (size, size)), 1.0)
+        local_mean = cv2.blur(floor, (size, size))
+        texture = float(cv2.meanStdDev(floor - local_mean, mask=self._valid)[1][0, 0])
+        if self.parameters.flat_field_px:
+            floor /= np.maximum(local_mean, 1.0)
         mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(floor, mask=self._valid))
         gain = GREY_SPREAD / max(spread, 1e-6)
-        return cv2.convertScaleAbs(floor, alpha=gain, beta=GREY_MEAN - gain * mean)
+        return cv2.convertScaleAbs(floor, alpha=gain, beta=GREY_MEAN - gain * mean), texture
 
     def _shrunk_mask(self, shape) -> np.ndarray:
         """Where a corner's whole window lies inside the mask and the image."""

@@ -73,7 +73,7 @@ def test_textureless_floor_is_flagged_not_measured():
     flat = np.full((240, 240), 128, np.uint8)
     measurement = _track(flat, flat)
     assert not measurement.quality.ok
-    assert "no texture" in measurement.quality.flag
+    assert measurement.quality.flag.startswith("no texture")
     assert np.isnan(measurement.median).all()
 
 
@@ -117,10 +117,37 @@ def _rotation_ratio(flat_field_px: int) -> float:
     across, down = np.linspace(0.5, 1.0, 300, dtype=np.float32), np.linspace(1.0, 0.85, 300, dtype=np.float32)
     gradient = down[:, None] * across[None, :]
     first, second = (np.clip(a * gradient, 0, 255).astype(np.uint8) for a in (image, _moved(image, 0, 0, angle)))
-    measurement = _track(first, second, flat_field_px=flat_field_px, max_corners=300, min_distance_px=5)
+    measurement = _track(
+        first, second, flat_field_px=flat_field_px, max_corners=300, min_distance_px=5, min_texture_grey=1.0
+    )
     return -increment_from_point_pairs(measurement.start, measurement.end)[2] / angle
 
 
 def test_the_flat_field_removes_the_rotation_bias_of_a_fixed_brightness_gradient():
     assert _rotation_ratio(41) == pytest.approx(1.0, abs=0.004)
     assert _rotation_ratio(0) < 0.99  # without it, the turn reads more than 1 % short
+
+
+def test_sensor_noise_on_a_blank_floor_is_not_texture():
+    rng = np.random.default_rng(4)
+    blank = [np.clip(128 + 1.5 * rng.standard_normal((240, 240)), 0, 255).astype(np.uint8) for _ in range(2)]
+    measurement = _track(*blank)
+    assert measurement.quality.flag.startswith("no texture")
+
+
+def test_two_groups_moving_apart_are_no_consensus():
+    """Half the image slides one way, half the other: the median would be a number, but not the floor's motion."""
+    image = _texture(size=300)
+    second = _moved(image, 0.0, 6.0)
+    second[:, 150:] = _moved(image, 0.0, -6.0)[:, 150:]
+    measurement = _track(image, second, max_corners=300, min_distance_px=5)
+    assert measurement.quality.flag.startswith("no consensus")
+
+
+def test_losing_most_tracks_is_flagged_even_when_enough_remain():
+    image = _texture(size=300)
+    second = _moved(image, 0.0, 5.0)
+    second[:, 60:] = _texture(size=300, seed=9)[:, 60:]  # most of the floor replaced: its tracks cannot be followed
+    measurement = _track(image, second, max_corners=300, min_distance_px=5)
+    assert measurement.quality.flag.startswith("too few tracks kept")
+    assert measurement.quality.kept >= 12
