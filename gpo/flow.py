@@ -45,13 +45,15 @@ class KLTParameters:
     its stopping rule. ``forward_backward_px``: a track is kept when tracking it back ends this close to where it
     started. ``redetect_below``: fewer tracks than this left, corners are detected afresh. ``min_tracks`` and
     ``min_kept_ratio``: fewer kept than this many, or than this share of the tracks followed, the frame is flagged.
-    ``inlier_px``: a track is an inlier when the frame's best rigid motion of the floor image (RANSAC over a
-    rotation, a shift and a scale) moves its start this close to its end. ``min_inlier_ratio``: a smaller share of
-    inliers flags the frame (no consensus: e.g. half the tracks on something that moves by itself).
+    ``inlier_px``: a vector is an inlier when it lies this close to the median, or within three robust sigmas of
+    it if they are wider; fewer than ``min_inlier_ratio`` of the kept vectors inliers flags the frame (no
+    consensus). Two groups of tracks of about equal size (the floor and something moving by itself) widen the
+    spread until every vector counts: the median then lies between them and nothing flags it.
     ``min_texture_grey``: a floor image whose local contrast (the standard deviation of the image minus its
     local mean, grey levels) is lower holds nothing but noise to track, and the frame is flagged.
     ``flat_field_px``: each image is divided by its mean over boxes this wide before tracking, which removes slow
-    brightness gradients (0: not).
+    brightness gradients (0: not). ``normalise_brightness``: False tracks the images as they come (no flat field,
+    no common mean and contrast), to see what the normalisation is for.
     """
 
     max_corners: int = 150
@@ -67,9 +69,10 @@ class KLTParameters:
     min_tracks: int = 12
     min_kept_ratio: float = 0.3
     inlier_px: float = 1.0
-    min_inlier_ratio: float = 0.6
+    min_inlier_ratio: float = 0.5
     min_texture_grey: float = 4.0
     flat_field_px: int = 41
+    normalise_brightness: bool = True
 
     def __post_init__(self):
         checks = {
@@ -106,8 +109,7 @@ class FlowQuality:
     """How well a frame's motion was measured.
 
     ``tracked``: tracks followed from the previous frame; ``kept``: those passing the forward-backward check;
-    ``inliers``: kept tracks that follow the frame's best rigid motion; ``spread_px``: the kept vectors' robust
-    standard deviation about the median (1.4826 MAD),
+    ``inliers``: kept vectors near the median; ``spread_px``: their robust standard deviation (1.4826 MAD),
     pixels; ``flag``: None when the frame is measured, else why it is not.
     """
 
@@ -226,14 +228,11 @@ class FloorFlow:
         median = np.median(vectors, axis=0)
         distance = np.hypot(*(vectors - median).T)
         spread = MAD_TO_SIGMA * float(np.median(distance))
-        _, inlier = cv2.estimateAffinePartial2D(
-            start, end, method=cv2.RANSAC, ransacReprojThreshold=p.inlier_px, maxIters=100, refineIters=0
-        )
-        inlier = np.zeros(len(start), bool) if inlier is None else inlier.ravel().astype(bool)
+        inlier = distance <= max(p.inlier_px, 3.0 * spread)
         quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread)
         flag = None
         if quality.inlier_ratio < p.min_inlier_ratio:
-            flag = f"no consensus: {quality.inliers} of {quality.kept} tracks follow one rigid motion"
+            flag = f"no consensus: {quality.inliers} of {quality.kept} vectors near the median"
         elif np.hypot(*(median - prediction)) > 0.8 * p.reach_px:
             change = np.hypot(*(median - prediction))
             flag = f"too fast: the motion changed by {change:.0f} px, near the pyramid's reach {p.reach_px:.0f} px"
@@ -266,6 +265,8 @@ class FloorFlow:
         floor = image.astype(np.float32)
         local_mean = cv2.blur(floor, (size, size))
         texture = float(cv2.meanStdDev(floor - local_mean, mask=self._valid)[1][0, 0])
+        if not self.parameters.normalise_brightness:
+            return image, texture
         if self.parameters.flat_field_px:
             floor /= np.maximum(local_mean, 1.0)
         mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(floor, mask=self._valid))
