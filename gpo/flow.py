@@ -29,6 +29,7 @@ import numpy as np
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
 GREY_MEAN, GREY_SPREAD = 128.0, 40.0  # every floor image is scaled to this mean and standard deviation
 CONTRAST_BOX_PX = 41  # the local mean for the texture measure when there is no flat field
+STATISTICS_STEP = 2  # image statistics are taken over every second row and column
 
 
 class FlowError(ValueError):
@@ -247,7 +248,7 @@ class FloorFlow:
         size = image.shape[::-1]
         if self._size is None:
             self._size = size
-            self._valid = None if self.mask is None else self.mask.astype(np.uint8)
+            self._valid = None if self.mask is None or self.mask.all() else self.mask.astype(np.uint8)
             self._detect_mask = self._shrunk_mask(image.shape)
         elif size != self._size:
             raise FlowError(f"floor image size changed from {self._size} to {size} (width, height)")
@@ -264,12 +265,14 @@ class FloorFlow:
         size = self.parameters.flat_field_px or CONTRAST_BOX_PX
         floor = image.astype(np.float32)
         local_mean = cv2.blur(floor, (size, size))
-        texture = float(cv2.meanStdDev(floor - local_mean, mask=self._valid)[1][0, 0])
+        sample = np.s_[::STATISTICS_STEP, ::STATISTICS_STEP]  # a quarter of the pixels: plenty for mean and spread
+        mask = None if self._valid is None else self._valid[sample]
+        texture = float(cv2.meanStdDev(floor[sample] - local_mean[sample], mask=mask)[1][0, 0])
         if not self.parameters.normalise_brightness:
             return image, texture
         if self.parameters.flat_field_px:
-            floor /= np.maximum(local_mean, 1.0)
-        mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(floor, mask=self._valid))
+            floor = cv2.divide(floor, local_mean)  # where the local mean is 0, so is the image: 0
+        mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(floor[sample], mask=mask))
         gain = GREY_SPREAD / max(spread, 1e-6)
         return cv2.convertScaleAbs(floor, alpha=gain, beta=GREY_MEAN - gain * mean), texture
 

@@ -39,7 +39,7 @@ need no model at all: a speed v of the rear axle and a yaw rate omega move the p
 (v, omega L), so v = V cos(delta) and omega = V sin(delta) / L with delta = atan2 and V signed, which holds
 forwards, backwards and on the spot (``exact_velocities``); a constant (v, omega) over dt is an exact circular
 arc (``arc_increment``), and ``increment_from_point_motion`` inverts the whole frame's motion of the
-measured point exactly (no first-order step at all).
+measured point exactly, in closed form (no first-order step at all).
 
 A third route needs no kinematic model either: the rigid 2-D motion of many floor points between two frames
 (``increment_from_point_pairs``) is the frame's increment, sideways sliding included.
@@ -47,12 +47,12 @@ A third route needs no kinematic model either: the rigid 2-D motion of many floo
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 SMALL_ANGLE = 1e-3  # below this (rad) the arc functions use their Taylor series (exact to 1e-20 there)
-NEWTON_STEPS = 6  # more than enough: the first-order start is within the square of the frame's rotation
 
 
 def metres_per_pixel(height_m: float, focal_px: float) -> float:
@@ -92,18 +92,15 @@ def integrate(increments, start=(0.0, 0.0, 0.0)) -> np.ndarray:
 
 
 def _sinc_cosc(phi):
-    """sin(phi)/phi, (1 - cos(phi))/phi and their derivatives, with the series near phi = 0."""
+    """sin(phi)/phi and (1 - cos(phi))/phi, with the series near phi = 0."""
     phi = np.asarray(phi, dtype=float)
     small = np.abs(phi) < SMALL_ANGLE
     safe = np.where(small, 1.0, phi)
-    sin, cos = np.sin(safe), np.cos(safe)
     versine = 2.0 * np.sin(safe / 2.0) ** 2  # 1 - cos, without the cancellation
     p2 = phi**2
-    sinc = np.where(small, 1.0 - p2 / 6.0 + p2**2 / 120.0, sin / safe)
+    sinc = np.where(small, 1.0 - p2 / 6.0 + p2**2 / 120.0, np.sin(safe) / safe)
     cosc = np.where(small, phi * (0.5 - p2 / 24.0 + p2**2 / 720.0), versine / safe)
-    dsinc = np.where(small, phi * (-1.0 / 3.0 + p2 / 30.0), (safe * cos - sin) / safe**2)
-    dcosc = np.where(small, 0.5 - p2 / 8.0 + p2**2 / 144.0, (safe * sin - versine) / safe**2)
-    return sinc, cosc, dsinc, dcosc
+    return sinc, cosc
 
 
 def arc_increment(v, omega, dt) -> np.ndarray:
@@ -111,7 +108,7 @@ def arc_increment(v, omega, dt) -> np.ndarray:
     (rad/s): a circular arc (a straight line when omega = 0), base_link never sliding sideways."""
     v, omega, dt = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v, omega, dt)))
     phi, distance = omega * dt, v * dt
-    sinc, cosc, _, _ = _sinc_cosc(phi)
+    sinc, cosc = _sinc_cosc(phi)
     return np.stack([distance * sinc, distance * cosc, phi], axis=-1)
 
 
@@ -208,25 +205,18 @@ def increment_from_point_motion(point_m, moved_to_m) -> np.ndarray:
     is seen at ``moved_to_m`` (2,) at the frame's end, for a rigid robot moving on one circular arc without sliding
     sideways at its rear axle (constant v and omega over the frame: forwards, backwards or on the spot).
 
-    Solves R(phi) q + s (sinc phi, cosc phi) = c for the arc length s and turn phi by Newton's method from the
-    first-order answer. The point must lie ahead of or behind the rear axle (|c_x| > 1 mm): at the axle the turn
-    is not observable.
+    The point seen at c is seen at q = T^-1 c, so c = R(phi) q + t. The rear axle moves along the chord of its arc,
+    and a chord lies at half the arc's turn: t is parallel to (cos phi/2, sin phi/2). Projecting c - R(phi) q on
+    the normal of that direction leaves tan(phi / 2) = (c_y - q_y) / (c_x + q_x): the turn in closed form, then
+    t = c - R(phi) q. The point must lie ahead of or behind the rear axle (|c_x| > 1 mm): at the axle the turn is
+    not observable. A frame turns less than half a turn.
     """
     c, q = np.asarray(point_m, dtype=float), np.asarray(moved_to_m, dtype=float)
     if abs(c[0]) < 1e-3:
         raise ValueError(f"the measured point {c} m is at the rear axle, where a turn moves it not at all")
-    d = c - q
-    phi = d[1] / c[0]
-    distance = d[0] + phi * c[1]
-    for _ in range(NEWTON_STEPS):
-        cos, sin = np.cos(phi), np.sin(phi)
-        sinc, cosc, dsinc, dcosc = _sinc_cosc(phi)
-        rotated = np.array([cos * q[0] - sin * q[1], sin * q[0] + cos * q[1]])
-        residual = rotated + distance * np.array([sinc, cosc]) - c
-        jacobian = np.array([[sinc, -rotated[1] + distance * dsinc], [cosc, rotated[0] + distance * dcosc]])
-        distance, phi = np.array([distance, phi]) - np.linalg.solve(jacobian, residual)
-    sinc, cosc, _, _ = _sinc_cosc(phi)
-    return np.array([distance * sinc, distance * cosc, phi])
+    phi = 2.0 * math.atan((c[1] - q[1]) / (c[0] + q[0]))
+    cos, sin = math.cos(phi), math.sin(phi)
+    return np.array([c[0] - (cos * q[0] - sin * q[1]), c[1] - (sin * q[0] + cos * q[1]), phi])
 
 
 # -------------------------------------------------------------------------------------- rigid point sets
