@@ -2,6 +2,7 @@
 
 python -m gpo demo [--out DIR]    figures, tables and the sample recording's odometry, written to DIR
 python -m gpo run BAG --config RIG.yaml --out traj.tum [--method gpo|gpo-exact|gpo-rigid] [--topic T]
+python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
 """
 
 from __future__ import annotations
@@ -13,13 +14,14 @@ from pathlib import Path
 from matplotlib.figure import Figure
 from scipy.spatial.transform import Rotation
 
-from gpo.bag import Recording, describe
+from gpo.bag import POSE_TYPES, Recording, describe
 from gpo.calibrate import main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
+from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
 from gpo.sim.record import GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, PRESETS, recording, simulate, write_sample_data
-from gpo.trajectory import base_from_sensor_odometry
+from gpo.trajectory import Trajectory, base_from_sensor_odometry
 
 
 def demo(out: Path) -> list[Path]:
@@ -121,6 +123,47 @@ def print_run(result: OdometryResult) -> None:
         print(f"stopped early {result.error}; the frames before were kept", file=sys.stderr)
 
 
+def read_truth(path: Path, topic: str | None) -> Trajectory:
+    """The ground truth in ``path``: a TUM file, or a bag (a .bag file, a folder, a .db3/.mcap file) and its pose
+    ``topic`` (geometry_msgs PoseStamped or TransformStamped, nav_msgs Odometry)."""
+    if not (path.is_dir() or path.suffix in (".bag", ".db3", ".mcap")):
+        if topic:
+            raise ValueError(f"--gt-topic {topic} names a bag's topic, but {path} is taken for a TUM file")
+        return read_tum(path)
+    with Recording(path) as bag:
+        if not topic:
+            poses = ", ".join(t.name for t in bag.topics() if t.msgtype in POSE_TYPES) or "none"
+            raise ValueError(
+                f"{path} is a recording: name its ground-truth topic with --gt-topic (pose topics: {poses})"
+            )
+        return bag.trajectory(topic)
+
+
+def read_tum(path: Path) -> Trajectory:
+    """``Trajectory.read_tum``, with the file named in every error."""
+    try:
+        return Trajectory.read_tum(path)
+    except ValueError as error:
+        if str(path) in str(error):
+            raise
+        raise ValueError(f"{path}: {error}") from None
+
+
+def save_evaluation_plot(evaluation: Evaluation, out: Path) -> Path:
+    """A figure of both paths (the estimate aligned) and the position error along the truth's distance."""
+    fig = Figure(figsize=(12, 4.8))
+    paths, errors = fig.subplots(1, 2, width_ratios=(1.2, 1))
+    draw_paths(
+        {"ground truth": evaluation.truth, f"estimate ({evaluation.alignment} aligned)": evaluation.estimate}, paths
+    )
+    errors.plot(evaluation.distances_m, evaluation.position_errors_m * 1e3)
+    errors.set_xlabel("distance travelled by the truth [m]")
+    errors.set_ylabel("position error [mm]")
+    errors.set_title(f"APE rmse {evaluation.ape_m.rmse * 1e3:.1f} mm, final {evaluation.final}", fontsize="small")
+    fig.savefig(out, dpi=110, bbox_inches="tight")
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m gpo", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
@@ -149,6 +192,14 @@ def main(argv: list[str] | None = None) -> int:
     run_parser.add_argument("--method", choices=METHODS, help="motion estimator (default: the config's)")
     run_parser.add_argument("--vector", choices=VECTORS, help="motion vector statistic (default: the config's)")
     run_parser.add_argument("--topic", help="image topic (default: the config's, else the bag's only one)")
+    evaluate_parser = commands.add_parser("evaluate", help="errors of a TUM trajectory against the ground truth")
+    evaluate_parser.add_argument("estimate", type=Path, help="the estimated trajectory, a TUM file")
+    evaluate_parser.add_argument("truth", type=Path, help="ground truth: a TUM file, or a bag with --gt-topic")
+    evaluate_parser.add_argument("--gt-topic", help="the bag's PoseStamped, Odometry or TransformStamped topic")
+    alignments = [a.value for a in Alignment]
+    evaluate_parser.add_argument("--align", default="origin", choices=alignments, help="(default: origin)")
+    evaluate_parser.add_argument("--delta", type=float, default=RPE_DELTA_M, help="RPE segment length, m (default 1)")
+    evaluate_parser.add_argument("--plot", type=Path, help="PNG to write: both paths and the error along the path")
     args = parser.parse_args(argv)
 
     try:
@@ -176,6 +227,13 @@ def main(argv: list[str] | None = None) -> int:
             for path in result.write(args.out):
                 print(f"wrote {path}")
             return 1 if result.error else 0
+        elif args.command == "evaluate":
+            evaluation = evaluate(
+                read_tum(args.estimate), read_truth(args.truth, args.gt_topic), args.align, args.delta
+            )
+            print(evaluation)
+            if args.plot:
+                print(f"wrote {save_evaluation_plot(evaluation, args.plot)}")
         elif args.command == "sample-data":
             for path in write_sample_data(args.out):
                 print(f"wrote {path}")

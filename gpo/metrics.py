@@ -1,29 +1,189 @@
-"""How far an estimated trajectory is from the truth, with evo doing the association and the alignment.
+"""How far an estimated trajectory is from the truth, with evo doing the association, the alignment and the errors.
 
-Trajectories are ``gpo.trajectory.Trajectory`` objects (base_link in some frame, integer-nanosecond stamps);
-``to_evo`` turns one into evo's ``PoseTrajectory3D``. ``final_error`` is the figure the issues and the papers
-quote: after associating the two by time and placing the estimate's first pose on the truth's (evo's
-``align_origin``), the distance between the last positions in the floor plane, in metres and in per cent of the
-distance the truth travelled, and the difference of the last headings.
+Trajectories are ``gpo.trajectory.Trajectory`` objects (base_link in some world frame, integer-nanosecond stamps) or
+evo ``PoseTrajectory3D`` objects (float-second stamps); ``to_evo`` turns the first into the second and ``from_evo``
+back. Each function first associates the two by time (``associate``: evo's ``sync``, nearest stamps within
+``MAX_STAMP_DIFFERENCE_S``), then moves the estimate onto the truth (``Alignment``) and expresses every error in the
+truth's frame.
+
+Alignments
+----------
+``none``    the estimate as it is, in the truth's frame.
+``origin``  the estimate's first pose placed on the truth's (evo's ``align_origin``): what the papers do.
+``se3``     evo's Umeyama alignment of all associated positions (rotation and translation, no scale).
+``se2``     rotation about z and translation in x-y that best fit all associated positions (least squares): evo's
+            Umeyama on the x-y coordinates alone. For a robot on the floor; a straight path is enough, where ``se3``
+            cannot tell the rotation about the path's own line.
+``posyaw``  rpg_trajectory_evaluation's ``posyaw`` over all frames (``align_num_frames: -1``, its
+            ``alignPositionYaw``): the rotation about z and the 3-D translation minimising the summed squared
+            position differences, with Rz maximising trace(Rz C), C = sum of (p_est - mean_est)(p_gt - mean_gt)^T
+            (its ``get_best_yaw``), and t = mean_gt - Rz mean_est. Orientations do not enter. The best Rz is the
+            proper 2-D Umeyama rotation of the x-y coordinates, so ``posyaw`` is ``se2`` plus the shift of the mean
+            height; the two agree for a path on the floor.
+
+Errors (``evaluate``)
+---------------------
+APE         evo's absolute position error (``PoseRelation.translation_part``): the 3-D distance between associated
+            positions after the alignment, metres; RMSE, mean, median, max.
+RPE         evo's relative position error over consecutive segments of at least ``rpe_delta_m`` metres (default
+            ``RPE_DELTA_M`` = 1 m) travelled by the truth (``delta_unit=Unit.meters``, pairs from the reference):
+            metres of error per segment. The relative error in % is its mean over the delta. It does not depend on
+            the alignment.
+final       ``final_error``'s definition after the chosen alignment: the distance between the last positions in the
+            floor plane, metres and % of the distance the truth travelled, and the last heading difference.
+heading     the yaw (heading of base_link's x axis in the floor plane, ``atan2(R[1, 0], R[0, 0])``) of the estimate
+            minus the truth's, wrapped to (-pi, pi]. evo's ``rotation_angle_deg`` is the full 3-D angle, which also
+            counts tilt; heading here is the yaw alone. RMSE and final, degrees.
+
+The papers' numbers
+-------------------
+First paper (Ground Plane Odometry), Tables 3 and 4, "translation error": the final position error in metres after
+placing the estimate's first pose on the truth's (``translation_error``, the ``position_m`` of ``final_error``).
+
+Second paper (floor feature odometer), Table 2, after aligning the first pose (``table2_metrics``): positioning
+RMSE (APE RMSE, metres), heading RMSE (degrees), final error in mm and in % of the distance travelled, and relative
+error (RPE mean per 1 m travelled, %). The paper does not spell the last one out; here it is the drift per metre.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
-from evo.core import sync
+from evo.core import filters, geometry, lie_algebra, metrics, sync
 from evo.core.trajectory import PoseTrajectory3D
 
 from gpo.trajectory import Trajectory
 
 MAX_STAMP_DIFFERENCE_S = 0.005  # poses further apart in time than this are not associated
+MIN_POSES = 2  # associated poses needed for any error
+RPE_DELTA_M = 1.0  # the RPE's segment length: distance travelled by the truth, metres
+
+
+class Alignment(StrEnum):
+    """How the estimate is moved onto the truth before the errors (see the module docstring)."""
+
+    NONE = "none"
+    ORIGIN = "origin"
+    SE2 = "se2"
+    SE3 = "se3"
+    POSYAW = "posyaw"
 
 
 def to_evo(trajectory: Trajectory) -> PoseTrajectory3D:
     """evo's trajectory of the same poses (quaternions reordered to w, x, y, z; stamps in float seconds)."""
     quaternions = trajectory.quaternions[:, [3, 0, 1, 2]]
     return PoseTrajectory3D(trajectory.positions.copy(), quaternions, trajectory.times)
+
+
+def from_evo(trajectory: PoseTrajectory3D, frame_id: str = "world", child_frame_id: str = "base_link") -> Trajectory:
+    """Our trajectory of evo's poses (quaternions reordered to x, y, z, w; float-second stamps rounded to whole
+    nanoseconds, so as exact as the floats: within 0.2 us at today's Unix times)."""
+    stamps = np.round(trajectory.timestamps * 1e9).astype(np.int64)
+    quaternions = trajectory.orientations_quat_wxyz[:, [1, 2, 3, 0]]
+    return Trajectory(stamps, trajectory.positions_xyz, quaternions, frame_id, child_frame_id)
+
+
+def associate(
+    estimate: Trajectory | PoseTrajectory3D,
+    truth: Trajectory | PoseTrajectory3D,
+    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
+    min_poses: int = MIN_POSES,
+) -> tuple[PoseTrajectory3D, PoseTrajectory3D]:
+    """(estimate, truth) as evo trajectories reduced to the poses matched by time (evo's nearest-stamp ``sync``,
+    at most ``max_difference_s`` seconds apart); copies, the inputs are not changed.
+
+    Raises ValueError naming the problem: a non-finite number in either, no overlap in time (both time ranges
+    given), or fewer than ``min_poses`` matching stamps (how many did).
+    """
+    estimated, reference = _checked(estimate, "estimate"), _checked(truth, "truth")
+    (e0, e1), (t0, t1) = estimated.timestamps[[0, -1]], reference.timestamps[[0, -1]]
+    if e0 > t1 + max_difference_s or t0 > e1 + max_difference_s:
+        raise ValueError(
+            f"the trajectories do not match in time, they do not overlap: the estimate spans {e0:.3f} .. {e1:.3f} s, "
+            f"the truth {t0:.3f} .. {t1:.3f} s"
+        )
+    try:
+        reference, estimated = sync.associate_trajectories(reference, estimated, max_diff=max_difference_s)
+    except sync.SyncException:
+        matched = 0
+    else:
+        matched = estimated.num_poses
+    if matched < min_poses:
+        raise ValueError(
+            f"only {matched} pose(s) of the estimate match the truth in time within {max_difference_s} s; "
+            f"at least {min_poses} needed"
+        )
+    return estimated, reference
+
+
+def _checked(trajectory: Trajectory | PoseTrajectory3D, name: str) -> PoseTrajectory3D:
+    """``trajectory`` as evo's, refused with a ValueError naming it when empty or not finite."""
+    if isinstance(trajectory, Trajectory):
+        if len(trajectory) == 0:
+            raise ValueError(f"the {name} has no poses")
+        trajectory = to_evo(trajectory)
+    values = np.column_stack([trajectory.timestamps, trajectory.positions_xyz, trajectory.orientations_quat_wxyz])
+    bad = np.flatnonzero(~np.isfinite(values).all(axis=1))
+    if bad.size:
+        raise ValueError(f"the {name} has NaN or infinite numbers in {bad.size} pose(s), first at pose {bad[0]}")
+    return trajectory
+
+
+def apply_alignment(estimate: PoseTrajectory3D, truth: PoseTrajectory3D, mode: Alignment | str) -> np.ndarray:
+    """Move the associated ``estimate`` onto ``truth`` in place by ``mode``; return the 4x4 rigid transform applied
+    (truth's frame from the estimate's). Raises ValueError for an unknown mode or positions it cannot align."""
+    try:
+        mode = Alignment(mode)
+    except ValueError:
+        raise ValueError(f"unknown alignment {mode!r}: expected one of {', '.join(Alignment)}") from None
+    try:
+        return _ALIGNERS[mode](estimate, truth)
+    except geometry.GeometryException as error:
+        raise ValueError(
+            f"cannot align by {mode}: {error} (positions along one line need se2, posyaw or origin; "
+            "a robot that does not move, origin)"
+        ) from None
+
+
+def _align_se3(estimate: PoseTrajectory3D, truth: PoseTrajectory3D) -> np.ndarray:
+    """evo's Umeyama alignment of all positions, without scale."""
+    rotation, translation, _ = estimate.align(truth)
+    return lie_algebra.se3(rotation, translation)
+
+
+def _align_yaw(estimate: PoseTrajectory3D, truth: PoseTrajectory3D, height: bool) -> np.ndarray:
+    """Rotation about z and translation in x-y by evo's Umeyama on the x-y positions; with ``height``, also the
+    shift of the mean z (``posyaw``)."""
+    rotation, translation, _ = geometry.umeyama_alignment(estimate.positions_xyz[:, :2].T, truth.positions_xyz[:, :2].T)
+    transform = np.eye(4)
+    transform[:2, :2], transform[:2, 3] = rotation, translation
+    if height:
+        transform[2, 3] = truth.positions_xyz[:, 2].mean() - estimate.positions_xyz[:, 2].mean()
+    estimate.transform(transform)
+    return transform
+
+
+_ALIGNERS = {
+    Alignment.NONE: lambda estimate, truth: np.eye(4),
+    Alignment.ORIGIN: lambda estimate, truth: estimate.align_origin(truth),
+    Alignment.SE3: _align_se3,
+    Alignment.SE2: lambda estimate, truth: _align_yaw(estimate, truth, height=False),
+    Alignment.POSYAW: lambda estimate, truth: _align_yaw(estimate, truth, height=True),
+}
+
+
+def heading_errors(estimate: PoseTrajectory3D, truth: PoseTrajectory3D) -> np.ndarray:
+    """Yaw of each associated estimate pose minus the truth's, radians wrapped to (-pi, pi], shape (N,)."""
+    difference = _yaw(estimate) - _yaw(truth)
+    return np.angle(np.exp(1j * difference))
+
+
+def _yaw(trajectory: PoseTrajectory3D) -> np.ndarray:
+    """Heading of each pose's x axis in the floor plane, radians: atan2(R[1, 0], R[0, 0])."""
+    rotations = np.asarray(trajectory.poses_se3)[:, :3, :3]
+    return np.arctan2(rotations[:, 1, 0], rotations[:, 0, 0])
 
 
 @dataclass(frozen=True)
@@ -48,20 +208,162 @@ class FinalError:
         )
 
 
-def final_error(estimate: Trajectory, truth: Trajectory, max_difference_s: float = MAX_STAMP_DIFFERENCE_S):
+def _final(estimate: PoseTrajectory3D, truth: PoseTrajectory3D) -> FinalError:
+    """``FinalError`` of an associated, aligned pair."""
+    position = float(np.hypot(*(estimate.positions_xyz[-1, :2] - truth.positions_xyz[-1, :2])))
+    heading = float(heading_errors(estimate, truth)[-1])
+    return FinalError(position, heading, float(truth.path_length), truth.num_poses)
+
+
+def final_error(
+    estimate: Trajectory | PoseTrajectory3D,
+    truth: Trajectory | PoseTrajectory3D,
+    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
+) -> FinalError:
     """``FinalError`` of ``estimate`` against ``truth``: associated by time, the estimate's first pose placed on the
-    truth's. Raises ValueError when fewer than two poses match in time."""
-    try:
-        reference, estimated = sync.associate_trajectories(
-            to_evo(truth), to_evo(estimate), max_diff=max_difference_s
-        )
-    except sync.SyncException as error:
-        raise ValueError(f"the trajectories do not match in time: {error}") from None
-    if reference.num_poses < 2:
-        raise ValueError(f"only {reference.num_poses} pose(s) match in time within {max_difference_s} s")
+    truth's. Raises ValueError as ``associate`` does (fewer than two poses matching in time, among others)."""
+    estimated, reference = associate(estimate, truth, max_difference_s)
     estimated.align_origin(reference)
-    last_true, last_estimated = reference.poses_se3[-1], estimated.poses_se3[-1]
-    position = float(np.hypot(*(last_estimated[:2, 3] - last_true[:2, 3])))
-    turn = last_true[:2, :2].T @ last_estimated[:2, :2]
-    heading = float(np.arctan2(turn[1, 0], turn[0, 0]))
-    return FinalError(position, heading, float(reference.path_length), reference.num_poses)
+    return _final(estimated, reference)
+
+
+def translation_error(
+    estimate: Trajectory | PoseTrajectory3D,
+    truth: Trajectory | PoseTrajectory3D,
+    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
+) -> float:
+    """The first paper's "translation error" (its Tables 3 and 4): the final position error in metres, in the floor
+    plane, after placing the estimate's first pose on the truth's."""
+    return final_error(estimate, truth, max_difference_s).position_m
+
+
+@dataclass(frozen=True)
+class Statistics:
+    """Summary of a metric's errors, in the metric's unit."""
+
+    rmse: float
+    mean: float
+    median: float
+    max: float
+
+    @classmethod
+    def of(cls, metric: metrics.PE) -> Statistics:
+        """The statistics evo computed for ``metric``."""
+        values = metric.get_all_statistics()
+        return cls(*(float(values[name]) for name in ("rmse", "mean", "median", "max")))
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """An estimate against the truth after an ``alignment`` (see the module docstring for each number).
+
+    ``ape_m``: position errors, metres. ``rpe_m``: position error per segment of ``rpe_delta_m`` travelled by the
+    truth, metres; None when the truth travels less than that. ``final``: the last pose's error.
+    ``heading_rmse_deg``: RMSE of the yaw differences, degrees. The per-pose arrays and the associated
+    trajectories (``estimate`` aligned, both in the truth's frame) are kept for plots.
+    """
+
+    alignment: Alignment
+    ape_m: Statistics
+    rpe_m: Statistics | None
+    rpe_delta_m: float
+    final: FinalError
+    heading_rmse_deg: float
+    distances_m: np.ndarray = field(compare=False, repr=False)  # along the truth from its first associated pose
+    position_errors_m: np.ndarray = field(compare=False, repr=False)  # evo's APE of each pose
+    heading_errors_rad: np.ndarray = field(compare=False, repr=False)
+    estimate: Trajectory = field(compare=False, repr=False)
+    truth: Trajectory = field(compare=False, repr=False)
+
+    @property
+    def relative_error_percent(self) -> float | None:
+        """Mean RPE over its segment length, %: drift per distance travelled (None without an RPE)."""
+        return None if self.rpe_m is None else 100.0 * self.rpe_m.mean / self.rpe_delta_m
+
+    def table2(self) -> dict[str, float | None]:
+        """The second paper's Table 2 columns; theirs when ``alignment`` is ``origin`` (see ``table2_metrics``)."""
+        return {
+            "positioning_rmse_m": self.ape_m.rmse,
+            "heading_rmse_deg": self.heading_rmse_deg,
+            "final_error_mm": self.final.position_m * 1e3,
+            "final_error_percent": self.final.percent,
+            "relative_error_percent": self.relative_error_percent,
+        }
+
+    def table(self) -> str:
+        """A readable multi-line table of every number: lengths in mm, angles in degrees."""
+        final, relative = self.final, self.relative_error_percent
+        rpe = f"none: the truth travels less than {self.rpe_delta_m:g} m"
+        rows = {
+            "alignment": str(self.alignment),
+            "poses associated": str(final.poses),
+            "distance (truth)": f"{final.distance_m:.3f} m",
+            "": "".join(f"{name:>9}" for name in ("rmse", "mean", "median", "max")),
+            "APE position [mm]": _millimetres(self.ape_m),
+            f"RPE per {self.rpe_delta_m:g} m [mm]": rpe if self.rpe_m is None else _millimetres(self.rpe_m),
+            "relative error": "none" if relative is None else f"{relative:.3f} % (RPE mean / {self.rpe_delta_m:g} m)",
+            "final position error": f"{final.position_m * 1e3:.1f} mm = {final.percent:.3f} % of the distance",
+            "heading (yaw) error": (
+                f"rmse {self.heading_rmse_deg:.3f} deg, final {np.degrees(final.heading_rad):+.3f} deg"
+            ),
+        }
+        return "\n".join(f"{label:<24}{value}" for label, value in rows.items())
+
+    def __str__(self) -> str:
+        return self.table()
+
+
+def _rpe(estimate: PoseTrajectory3D, truth: PoseTrajectory3D, delta_m: float) -> Statistics | None:
+    """evo's RPE (translation, consecutive segments of at least ``delta_m`` travelled by the truth), or None when
+    the truth travels less than ``delta_m``."""
+    rpe = metrics.RPE(metrics.PoseRelation.translation_part, delta_m, metrics.Unit.meters, pairs_from_reference=True)
+    try:
+        rpe.process_data((truth, estimate))
+    except filters.FilterException:
+        return None
+    return Statistics.of(rpe)
+
+
+def _millimetres(statistics: Statistics) -> str:
+    """RMSE, mean, median and max of metres, in millimetres, in columns of 9."""
+    values = (statistics.rmse, statistics.mean, statistics.median, statistics.max)
+    return "".join(f"{value * 1e3:9.2f}" for value in values)
+
+
+def evaluate(
+    estimate: Trajectory | PoseTrajectory3D,
+    truth: Trajectory | PoseTrajectory3D,
+    align: Alignment | str = Alignment.ORIGIN,
+    rpe_delta_m: float = RPE_DELTA_M,
+    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
+) -> Evaluation:
+    """``Evaluation`` of ``estimate`` against ``truth``: associated by time, aligned by ``align``, then evo's APE and
+    RPE, the final error and the heading errors. Raises ValueError as ``associate`` and ``align`` do."""
+    estimated, reference = associate(estimate, truth, max_difference_s)
+    apply_alignment(estimated, reference, align)
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((reference, estimated))
+    headings = heading_errors(estimated, reference)
+    return Evaluation(
+        alignment=Alignment(align),
+        ape_m=Statistics.of(ape),
+        rpe_m=_rpe(estimated, reference, rpe_delta_m),
+        rpe_delta_m=rpe_delta_m,
+        final=_final(estimated, reference),
+        heading_rmse_deg=float(np.degrees(np.sqrt(np.mean(headings**2)))),
+        distances_m=reference.distances,
+        position_errors_m=ape.error,
+        heading_errors_rad=headings,
+        estimate=from_evo(estimated),
+        truth=from_evo(reference),
+    )
+
+
+def table2_metrics(
+    estimate: Trajectory | PoseTrajectory3D,
+    truth: Trajectory | PoseTrajectory3D,
+    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
+) -> dict[str, float | None]:
+    """The second paper's Table 2 for one run, after placing the estimate's first pose on the truth's: positioning
+    RMSE (m), heading RMSE (deg), final error (mm and % of the distance) and relative error (% per 1 m of RPE)."""
+    return evaluate(estimate, truth, Alignment.ORIGIN, RPE_DELTA_M, max_difference_s).table2()

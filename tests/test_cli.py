@@ -4,8 +4,13 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
+from gpo.__main__ import main
+from gpo.bag import Recording
 from gpo.camera import T265_LIKE
+from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+from gpo.trajectory import Trajectory
 
 
 def test_demo_writes_figures_and_the_field_of_view_table(tmp_path):
@@ -23,3 +28,81 @@ def test_demo_writes_figures_and_the_field_of_view_table(tmp_path):
 def test_unknown_command_fails_with_usage():
     result = subprocess.run([sys.executable, "-m", "gpo", "fly"], capture_output=True, text=True)
     assert result.returncode == 2 and "invalid choice: 'fly'" in result.stderr
+
+
+def _write_scaled_pair(truth, folder, scale: float):
+    """TUM files of ``truth`` and of an estimate that covers ``scale`` times its ground from the same start; return
+    (estimate, truth) paths and the final position error in mm that origin alignment must find."""
+    start = truth.positions[0]
+    estimate = Trajectory(truth.stamps_ns, start + scale * (truth.positions - start), truth.quaternions)
+    chord_m = np.hypot(*(truth.positions[-1, :2] - start[:2]))
+    paths = (estimate.write_tum(folder / "estimate.tum"), truth.write_tum(folder / "truth.tum"))
+    return paths, (scale - 1.0) * chord_m * 1e3
+
+
+def test_evaluate_prints_the_table_and_plots_two_tum_files(tmp_path):
+    t = np.linspace(0.0, 10.0, 101)
+    truth = Trajectory.from_planar(np.round(t * 1e9).astype(np.int64), 2.0 * np.sin(0.3 * t), t, 0.3 * t)
+    (estimate, truth_tum), final_mm = _write_scaled_pair(truth, tmp_path, 1.02)
+    plot = tmp_path / "evaluation.png"
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gpo",
+            "evaluate",
+            str(estimate),
+            str(truth_tum),
+            "--align",
+            "origin",
+            "--plot",
+            str(plot),
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert "alignment               origin" in result.stdout and "poses associated        101" in result.stdout
+    assert f"final position error    {final_mm:.1f} mm" in result.stdout
+    assert "RPE per 1 m [mm]" in result.stdout and f"wrote {plot}" in result.stdout
+    assert plot.read_bytes().startswith(b"\x89PNG")
+
+
+def test_evaluate_reads_the_truth_from_a_bag(tmp_path, capsys):
+    bag = recording("test", progress=False)
+    with Recording(bag) as recorded:
+        truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
+    (estimate, _), final_mm = _write_scaled_pair(truth, tmp_path, 1.05)
+    assert main(["evaluate", str(estimate), str(bag), "--gt-topic", GROUND_TRUTH_TOPIC, "--align", "se2"]) == 0
+    out = capsys.readouterr().out
+    assert "alignment               se2" in out and f"poses associated        {len(truth)}" in out
+    assert "none: the truth travels less than 1 m" in out  # the test recording covers 0.8 m
+    assert main(["evaluate", str(estimate), str(bag), "--gt-topic", GROUND_TRUTH_TOPIC, "--delta", "0.2"]) == 0
+    out = capsys.readouterr().out
+    assert f"final position error    {final_mm:.1f} mm" in out and "RPE per 0.2 m [mm]" in out
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        ([], "is a recording: name its ground-truth topic with --gt-topic (pose topics: /camera/odom/sample, /mocap"),
+        (["--gt-topic", "/camera/fisheye1/camera_info"], "carries sensor_msgs/msg/CameraInfo; expected one of"),
+        (["--gt-topic", "/mocap/base_lnk"], "has no topic /mocap/base_lnk (did you mean /mocap/base_link?)"),
+    ],
+)
+def test_evaluate_names_what_is_wrong_with_the_bag(tmp_path, capsys, arguments, message):
+    bag = recording("test", progress=False)
+    with Recording(bag) as recorded:
+        (estimate, _), _ = _write_scaled_pair(recorded.trajectory(GROUND_TRUTH_TOPIC), tmp_path, 1.0)
+    assert main(["evaluate", str(estimate), str(bag), *arguments]) == 1
+    error = capsys.readouterr().err
+    assert error.startswith("error: ") and message in error
+
+
+def test_evaluate_names_the_file_with_bad_numbers(tmp_path, capsys):
+    t = np.linspace(0.0, 1.0, 11)
+    truth = Trajectory.from_planar(np.round(t * 1e9).astype(np.int64), t, 0 * t, 0 * t).write_tum(tmp_path / "gt.tum")
+    estimate = tmp_path / "estimate.tum"
+    estimate.write_text(truth.read_text().replace("1.0 0.0 0.0", "nan 0.0 0.0"))
+    assert main(["evaluate", str(estimate), str(truth)]) == 1
+    assert capsys.readouterr().err == f"error: {estimate}: positions and quaternions must be finite numbers\n"

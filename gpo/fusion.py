@@ -1,0 +1,148 @@
+"""An extended Kalman filter that fuses odometry sources into one path of ``base_link``.
+
+State (``STATE``): x, y (m) and heading theta (rad) of base_link in the odometry frame, its forward speed v (m/s)
+and yaw rate omega (rad/s). Process model: v and omega stay constant over a step, driven by white acceleration
+noise (``ProcessNoise``); the pose moves along the exact arc they describe (``gpo.kinematics.arc_increment``),
+and the covariance through the Jacobian of that motion.
+
+Every source is used **differentially**, like robot_localization's differential mode: a source's pose increment
+over its own interval dt (already turned into base_link, see ``base_increment``) becomes a measurement of
+(v, omega) = (arc length / dt, turn / dt). Absolute poses that drift (a tracking camera's odometry) therefore
+never pull the filter's pose, only their motion counts, weighted by the covariance each measurement carries.
+Measurements must come in time order; ``OdometryFusion.add`` refuses stale ones (earlier than the filter's time)
+and the caller decides what to skip.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from filterpy.kalman import ExtendedKalmanFilter
+
+from gpo.kinematics import arc_increment, between, compose
+
+STATE = ("x", "y", "theta", "v", "omega")
+VELOCITIES = np.array([[0.0, 0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 0.0, 1.0]])  # H: a source measures (v, omega)
+MAX_NIS = 50.0  # an innovation this many sigmas squared away is refused as an outlier
+
+
+class FilterDiverged(RuntimeError):
+    """The filter's covariance stopped being a covariance (not finite, or not positive definite)."""
+
+
+@dataclass(frozen=True)
+class ProcessNoise:
+    """White noise driving the constant-velocity model: ``accel_mps2`` (m/s^2 per sqrt(Hz)) on v and
+    ``angular_accel_radps2`` (rad/s^2 per sqrt(Hz)) on omega."""
+
+    accel_mps2: float = 0.5
+    angular_accel_radps2: float = 1.0
+
+
+def motion_jacobian(state: np.ndarray, dt: float) -> np.ndarray:
+    """F (5, 5): the derivative of the first-order motion x += v cos(theta) dt, y += v sin(theta) dt,
+    theta += omega dt with respect to the state."""
+    theta, v = state[2], state[3]
+    jacobian = np.eye(5)
+    jacobian[0, 2], jacobian[0, 3] = -v * np.sin(theta) * dt, np.cos(theta) * dt
+    jacobian[1, 2], jacobian[1, 3] = v * np.cos(theta) * dt, np.sin(theta) * dt
+    jacobian[2, 4] = dt
+    return jacobian
+
+
+def process_covariance(state: np.ndarray, dt: float, noise: ProcessNoise) -> np.ndarray:
+    """Q (5, 5) of one step: the accelerations' white noise integrated once into (v, omega) and twice into the pose."""
+    theta = state[2]
+    gain = np.array(
+        [
+            [0.5 * dt**2 * np.cos(theta), 0.0],
+            [0.5 * dt**2 * np.sin(theta), 0.0],
+            [0.0, 0.5 * dt**2],
+            [dt, 0.0],
+            [0.0, dt],
+        ]
+    )
+    density = np.diag([noise.accel_mps2**2, noise.angular_accel_radps2**2]) / dt
+    return gain @ density @ gain.T
+
+
+def velocity_measurement(increment, dt: float) -> np.ndarray:
+    """(v, omega) of a base_link increment (dx, dy, dtheta) over ``dt`` seconds, as the arc through it: the arc
+    length over dt (signed by the direction of travel) and the turn over dt."""
+    dx, dy, turn = (float(value) for value in increment)
+    chord = np.hypot(dx, dy)
+    half = 0.5 * turn
+    arc = chord if abs(half) < 1e-9 else chord * half / np.sin(half)
+    return np.array([np.sign(dx) * arc / dt if chord > 0 else 0.0, turn / dt])
+
+
+class OdometryFusion:
+    """The EKF of ``STATE`` over time (seconds). ``add(time_s, increment, dt_s, covariance)`` takes a source's base_link
+    increment over [time_s - dt_s, time_s] with the covariance (2, 2) of the (v, omega) it implies."""
+
+    def __init__(self, start_s: float, noise: ProcessNoise = ProcessNoise(), pose=(0.0, 0.0, 0.0)):
+        self.noise = noise
+        self.time_s = float(start_s)
+        self._filter = ExtendedKalmanFilter(dim_x=5, dim_z=2)
+        self._filter.x = np.array([*pose, 0.0, 0.0], dtype=float)
+        self._filter.P = np.diag([1e-12, 1e-12, 1e-12, 1.0, 1.0])  # the pose is the origin; the motion unknown
+        self.refused = 0
+
+    @property
+    def state(self) -> np.ndarray:
+        """The state (5,) at ``time_s``."""
+        return self._filter.x.copy()
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """The state's covariance (5, 5)."""
+        return self._filter.P.copy()
+
+    def predict(self, time_s: float) -> None:
+        """Move the state to ``time_s`` (not before the filter's time) with the constant-velocity model."""
+        dt = time_s - self.time_s
+        if dt < 0:
+            raise ValueError(f"cannot predict back in time: {time_s:.6f} s is before the filter's {self.time_s:.6f} s")
+        if dt == 0:
+            return
+        ekf, state = self._filter, self._filter.x
+        ekf.F = motion_jacobian(state, dt)
+        ekf.Q = process_covariance(state, dt, self.noise)
+        step = arc_increment(state[3], state[4], dt)
+        cos, sin = np.cos(state[2]), np.sin(state[2])
+        ekf.P = ekf.F @ ekf.P @ ekf.F.T + ekf.Q
+        ekf.x = state + np.array([cos * step[0] - sin * step[1], sin * step[0] + cos * step[1], step[2], 0.0, 0.0])
+        self.time_s = time_s
+        self._check()
+
+    def add(self, time_s: float, increment, dt_s: float, covariance) -> bool:
+        """Fuse one source's increment (dx, dy, dtheta) over the ``dt_s`` seconds ending at ``time_s``; returns
+        False when the measurement is refused as an outlier (its normalised innovation squared above ``MAX_NIS``).
+        Raises ValueError for a measurement before the filter's time or with non-finite numbers."""
+        increment = np.asarray(increment, dtype=float)
+        if not (np.isfinite(increment).all() and dt_s > 0):
+            raise ValueError(f"a measurement needs a finite increment and dt_s > 0, got {increment} over {dt_s}")
+        self.predict(time_s)
+        measured = velocity_measurement(increment, dt_s)
+        ekf = self._filter
+        innovation = measured - ekf.x[3:]
+        spread = VELOCITIES @ ekf.P @ VELOCITIES.T + covariance
+        if innovation @ np.linalg.solve(spread, innovation) > MAX_NIS:
+            self.refused += 1
+            return False
+        ekf.update(measured, lambda _: VELOCITIES, lambda state: state[3:], R=np.asarray(covariance, dtype=float))
+        self._check()
+        return True
+
+    def _check(self) -> None:
+        covariance = self._filter.P
+        if not np.isfinite(covariance).all() or np.linalg.eigvalsh(0.5 * (covariance + covariance.T))[0] < -1e-12:
+            raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer positive definite")
+
+
+def base_increment(sensor_increment, sensor_in_base) -> np.ndarray:
+    """A sensor frame's planar increment (dx, dy, dtheta) turned into base_link's: T_BS Delta_S T_BS^-1, with
+    ``sensor_in_base`` the sensor's planar pose (x, y, yaw) in base_link."""
+    mount = np.asarray(sensor_in_base, dtype=float)
+    return compose(compose(mount, sensor_increment), between(mount, np.zeros(3)))
