@@ -21,6 +21,7 @@ import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
 from gpo.kinematics import arc_increment, between, compose
+from gpo.trajectory import Trajectory
 
 STATE = ("x", "y", "theta", "v", "omega")
 VELOCITIES = np.array([[0.0, 0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 0.0, 1.0]])  # H: a source measures (v, omega)
@@ -146,3 +147,65 @@ def base_increment(sensor_increment, sensor_in_base) -> np.ndarray:
     ``sensor_in_base`` the sensor's planar pose (x, y, yaw) in base_link."""
     mount = np.asarray(sensor_in_base, dtype=float)
     return compose(compose(mount, sensor_increment), between(mount, np.zeros(3)))
+
+
+@dataclass(frozen=True)
+class FusionSettings:
+    """What ``--method fused`` fuses: the floor odometry of ``floor_method`` with a tracking camera's own odometry on
+    ``tracking_topic`` (nav_msgs/Odometry of ``tracking_frame``, whose pose in base_link the bag's /tf_static holds).
+    Each source's increments are (v, omega) measurements with these standard deviations (m/s, rad/s); the process
+    noise is ``ProcessNoise(accel_mps2, angular_accel_radps2)``."""
+
+    floor_method: str = "gpo"
+    tracking_topic: str = "/camera/odom/sample"
+    tracking_frame: str = "camera_pose_frame"
+    floor_speed_sigma_mps: float = 0.005
+    floor_turn_sigma_radps: float = 0.03
+    tracking_speed_sigma_mps: float = 0.15
+    tracking_turn_sigma_radps: float = 0.15
+    accel_mps2: float = 0.5
+    angular_accel_radps2: float = 1.0
+
+
+def fuse(floor: Trajectory, measured: np.ndarray, tracking: Trajectory, settings: FusionSettings) -> Trajectory:
+    """The EKF's path of base_link at the floor odometry's stamps.
+
+    ``floor``: the floor odometry's base_link poses; ``measured`` (N,) bool: whether the step into each pose was
+    measured (coasted and held steps are not fused). ``tracking``: the tracking camera's odometry already turned
+    into base_link poses (``gpo.trajectory.base_from_sensor_odometry``); only its increments are used.
+    """
+    floor_covariance = np.diag([settings.floor_speed_sigma_mps, settings.floor_turn_sigma_radps]) ** 2
+    tracking_covariance = np.diag([settings.tracking_speed_sigma_mps, settings.tracking_turn_sigma_radps]) ** 2
+    events = [
+        *_increments(floor, floor_covariance, measured[1:]),
+        *_increments(tracking, tracking_covariance, np.ones(max(len(tracking) - 1, 0), bool)),
+    ]
+    events.sort(key=lambda event: event[0])
+    start = floor.times[0]
+    fusion = OdometryFusion(start, ProcessNoise(settings.accel_mps2, settings.angular_accel_radps2))
+    wanted = iter(floor.times[1:])
+    poses, next_time = [fusion.state[:3]], next(wanted, None)
+    for time_s, increment, dt, covariance in events:
+        while next_time is not None and next_time < time_s:
+            fusion.predict(next_time)
+            poses.append(fusion.state[:3])
+            next_time = next(wanted, None)
+        if time_s > start:
+            fusion.add(time_s, increment, dt, covariance)
+    while next_time is not None:
+        fusion.predict(max(next_time, fusion.time_s))
+        poses.append(fusion.state[:3])
+        next_time = next(wanted, None)
+    poses = np.array(poses)
+    return Trajectory.from_planar(floor.stamps_ns, poses[:, 0], poses[:, 1], poses[:, 2], frame_id=floor.frame_id)
+
+
+def _increments(trajectory: Trajectory, covariance: np.ndarray, use: np.ndarray):
+    """(end time s, base_link increment, dt s, covariance) of each step of ``trajectory`` where ``use`` is True."""
+    planar = np.column_stack([trajectory.positions[:, :2], np.unwrap(trajectory.yaw)])
+    steps = between(planar[:-1], planar[1:])
+    times = trajectory.times
+    return [
+        (times[k + 1], steps[k], times[k + 1] - times[k], covariance)
+        for k in np.flatnonzero(use & (np.diff(times) > 0))
+    ]

@@ -13,7 +13,9 @@ integrates the pose of ``base_link`` in ``odom`` (the pose at the first frame is
 - ``gpo-exact``: the same vector turned into the exact circular arc of a rigid robot that does not slide at its
   rear axle (reverse driving and turning on the spot included);
 - ``gpo-rigid``: no kinematic model: the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
-  frame's increment.
+  frame's increment;
+- ``fused``: one of those (``FusionSettings.floor_method``) and the tracking camera's own odometry from the same
+  bag, fused by the EKF of ``gpo.fusion``.
 
 Every frame gets a ``FrameRecord``. A frame that cannot be measured is flagged with the reason and the robot
 **coasts** across it at the last measured velocity, for at most ``max_gap_s``; beyond that it is held still.
@@ -34,16 +36,19 @@ from pathlib import Path
 import cv2
 import numpy as np
 import yaml
+from scipy.spatial.transform import Rotation
 
 from gpo.bag import Recording, StampWarning
 from gpo.config import load_rig, rig_to_dict
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
+from gpo.fusion import FusionSettings, fuse
 from gpo.ground import FloorImage, analytic_table
 from gpo.kinematics import PaperBicycle, compose, increment_from_point_motion, increment_from_point_pairs
 from gpo.rig import Rig
-from gpo.trajectory import Trajectory
+from gpo.trajectory import Trajectory, base_from_sensor_odometry
 
-METHODS = ("gpo", "gpo-exact", "gpo-rigid")
+FLOOR_METHODS = ("gpo", "gpo-exact", "gpo-rigid")
+METHODS = (*FLOOR_METHODS, "fused")
 VECTORS = ("median", "mean")
 RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
 DEFAULT_CONFIG = "sim_t265.yaml"
@@ -57,7 +62,8 @@ ODOMETRY_FLOOR_IMAGE = FloorImage.top_view((0.70, 0.90), (-0.10, 0.10), ODOMETRY
 class OdometryConfig:
     """Everything a run needs: the ``rig``, the ``floor`` image, the KLT ``klt`` parameters, the paper's bicycle
     ``model``, the ``method`` (one of ``METHODS``), the ``vector`` statistic (median or mean; for ``gpo`` and
-    ``gpo-exact``) and ``max_gap_s``, the longest time the robot coasts or a frame gap is bridged, seconds."""
+    ``gpo-exact``), ``max_gap_s``, the longest time the robot coasts or a frame gap is bridged, seconds, and the
+    ``fusion`` settings of the ``fused`` method."""
 
     rig: Rig
     floor: FloorImage
@@ -66,10 +72,14 @@ class OdometryConfig:
     method: str = "gpo-exact"
     vector: str = "median"
     max_gap_s: float = 0.5
+    fusion: FusionSettings = field(default_factory=FusionSettings)
 
     def __post_init__(self):
         if self.method not in METHODS:
             raise ValueError(f"unknown method {self.method!r}; the methods are {', '.join(METHODS)}")
+        if self.fusion.floor_method not in FLOOR_METHODS:
+            floor_method = self.fusion.floor_method
+            raise ValueError(f"fusion.floor_method must be one of {', '.join(FLOOR_METHODS)}, got {floor_method!r}")
         if self.vector not in VECTORS:
             raise ValueError(f"unknown vector {self.vector!r}; use {' or '.join(VECTORS)}")
         if not self.max_gap_s > 0:
@@ -100,8 +110,9 @@ def load_config(path=None) -> OdometryConfig:
     if kinematics is not None:
         model = PaperBicycle(float(kinematics["wheelbase_m"]), float(kinematics["rear_to_reference_m"]))
     odometry = document.get("odometry", {})
+    fusion = _dataclass_section(FusionSettings, document.get("fusion", {}), path, "fusion")
     try:
-        return OdometryConfig(rig, floor, klt, model, **odometry)
+        return OdometryConfig(rig, floor, klt, model, **odometry, fusion=fusion)
     except TypeError as error:
         raise ValueError(f"{path}: odometry: {error}; its keys are method, vector, max_gap_s") from None
 
@@ -122,6 +133,7 @@ def config_to_dict(config: OdometryConfig) -> dict:
             "rear_to_reference_m": config.model.rear_to_reference_m,
         },
         "odometry": {"method": config.method, "vector": config.vector, "max_gap_s": config.max_gap_s},
+        "fusion": {f.name: getattr(config.fusion, f.name) for f in fields(config.fusion)},
     }
 
 
@@ -286,10 +298,16 @@ class OdometryResult:
     source: str
     topic: str
     error: str | None = None
+    fused: Trajectory | None = None
 
     @property
     def trajectory(self) -> Trajectory:
-        """base_link in odom at every frame that was not skipped."""
+        """base_link in odom at every frame that was not skipped (for ``fused``, the EKF's path)."""
+        return self.fused if self.fused is not None else self.floor_trajectory
+
+    @property
+    def floor_trajectory(self) -> Trajectory:
+        """The floor odometry's own path of base_link in odom, at every frame that was not skipped."""
         kept = [r for r in self.records if r.status != "skipped"]
         poses = np.array([r.pose for r in kept]).reshape(-1, 3)
         stamps = np.array([r.stamp_ns for r in kept], dtype=np.int64)
@@ -337,7 +355,8 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
     else its only image topic). Returns what was computed even when reading stops early: then ``error`` says
     why (the error is not raised, so that the partial result can be written)."""
     config = config or load_config()
-    odometer = FloorOdometer(config)
+    fused = config.method == "fused"
+    odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
     records: list[FrameRecord] = []
     with Recording(bag) as recording, warnings.catch_warnings():
         warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
@@ -351,8 +370,22 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
             if not records:
                 raise
             error = f"after {len(records)} frames: {failure}"
-        seconds = time.perf_counter() - started
-    return OdometryResult(records, seconds, config, str(bag), topic, error)
+        result = OdometryResult(records, time.perf_counter() - started, config, str(bag), topic, error)
+        if fused:
+            result.fused = _fused_path(recording, result, config.fusion)
+            result.seconds = time.perf_counter() - started
+    return result
+
+
+def _fused_path(recording: Recording, result: OdometryResult, settings: FusionSettings) -> Trajectory:
+    """The EKF's path from the floor odometry of ``result`` and the recording's tracking-camera odometry."""
+    odometry = recording.trajectory(settings.tracking_topic)
+    translation, quaternion = recording.static_transform("base_link", settings.tracking_frame)
+    tracking = base_from_sensor_odometry(
+        odometry, (Rotation.from_quat(quaternion), translation), (Rotation.identity(), np.zeros(3))
+    )
+    measured = np.array([r.status == "measured" for r in result.records if r.status != "skipped"])
+    return fuse(result.floor_trajectory, measured, tracking, settings)
 
 
 def _choose_topic(recording: Recording, topic: str | None, rig: Rig) -> str:

@@ -136,6 +136,7 @@ def test_config_round_trip_and_the_default(tmp_path):
     changed = config.replace(method="gpo-rigid", vector="mean")
     again = load_config(save_config(tmp_path / "rig.yaml", changed))
     assert (again.method, again.vector, again.klt, again.model) == ("gpo-rigid", "mean", config.klt, config.model)
+    assert again.fusion == config.fusion
     np.testing.assert_array_equal(again.floor.affine, config.floor.affine)
     text = (tmp_path / "rig.yaml").read_text().replace("max_corners", "corners")
     (tmp_path / "bad.yaml").write_text(text)
@@ -151,3 +152,17 @@ def test_cli_run_writes_trajectory_and_summary(sample, tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "frames/s" in printed and "distance travelled" in printed
     assert (tmp_path / "t.summary.yaml").exists()
+
+
+def test_fused_runs_the_floor_odometry_and_the_tracking_camera_through_the_ekf(sample, tmp_path):
+    path, frames, truth = sample
+    config = load_config()
+    result = run(path, config.replace(method="fused"), progress=False)
+    np.testing.assert_array_equal(result.trajectory.stamps_ns, result.floor_trajectory.stamps_ns)
+    fused, _, _ = _final_error(result.trajectory, truth)
+    floor, _, _ = _final_error(result.floor_trajectory, truth)
+    assert result.config.fusion.floor_method == "gpo"
+    assert fused < 0.9 * floor  # the tracking camera's motion corrects part of the paper's model's reverse leg
+    bag = _write(tmp_path / "no-odometry.bag", frames[:5], [f.stamp_ns for f in frames[:5]])
+    with pytest.raises(ValueError, match="/camera/odom/sample"):
+        run(bag, config.replace(method="fused"), progress=False)
