@@ -377,15 +377,19 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
     return result
 
 
-def _fused_path(recording: Recording, result: OdometryResult, settings: FusionSettings) -> Trajectory:
-    """The EKF's path from the floor odometry of ``result`` and the recording's tracking-camera odometry."""
+def tracking_path(recording: Recording, settings: FusionSettings) -> Trajectory:
+    """The recording's tracking-camera odometry as the path of base_link in odom (the origin at its first pose)."""
     odometry = recording.trajectory(settings.tracking_topic)
     translation, quaternion = recording.static_transform("base_link", settings.tracking_frame)
-    tracking = base_from_sensor_odometry(
+    return base_from_sensor_odometry(
         odometry, (Rotation.from_quat(quaternion), translation), (Rotation.identity(), np.zeros(3))
     )
+
+
+def _fused_path(recording: Recording, result: OdometryResult, settings: FusionSettings) -> Trajectory:
+    """The EKF's path from the floor odometry of ``result`` and the recording's tracking-camera odometry."""
     measured = np.array([r.status == "measured" for r in result.records if r.status != "skipped"])
-    return fuse(result.floor_trajectory, measured, tracking, settings)
+    return fuse(result.floor_trajectory, measured, tracking_path(recording, settings), settings)
 
 
 def _choose_topic(recording: Recording, topic: str | None, rig: Rig) -> str:
