@@ -9,7 +9,7 @@ Target: 24 views calibrated, images to result, in under 20 s on a 2-core machine
 """
 
 import argparse
-import time
+import timeit
 
 import numpy as np
 
@@ -20,12 +20,7 @@ from gpo.sim.rigs import downward_rig, t265_rig
 
 def best_of(repeat: int, function) -> float:
     """The shortest of ``repeat`` runs of ``function()``, seconds."""
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return min(times)
+    return min(timeit.repeat(function, number=1, repeat=repeat))
 
 
 def main() -> None:

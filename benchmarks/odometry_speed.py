@@ -19,7 +19,7 @@ import argparse
 import subprocess
 import sys
 import tempfile
-import time
+import timeit
 from pathlib import Path
 
 import cv2
@@ -30,12 +30,8 @@ from gpo.sim.record import recording
 
 
 def best_seconds(function, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        started = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - started)
-    return min(times)
+    """The shortest of ``repeat`` runs of ``function()``, seconds."""
+    return min(timeit.repeat(function, number=1, repeat=repeat))
 
 
 def parts(bag: Path, config, repeat: int) -> dict[str, float]:

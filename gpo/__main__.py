@@ -12,16 +12,15 @@ import sys
 from pathlib import Path
 
 from matplotlib.figure import Figure
-from scipy.spatial.transform import Rotation
 
 from gpo.bag import POSE_TYPES, Recording, describe
 from gpo.calibrate import main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
-from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run
+from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run, tracking_path
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
-from gpo.sim.record import GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, PRESETS, recording, simulate, write_sample_data
-from gpo.trajectory import Trajectory, base_from_sensor_odometry
+from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording, simulate, write_sample_data
+from gpo.trajectory import Trajectory
 
 
 def demo(out: Path) -> list[Path]:
@@ -63,8 +62,7 @@ def sample_recording_figures(out: Path) -> list[Path]:
         start = bag.start_ns
         frames = [next(bag.frames(topic, start_ns=start + round(t * 1e9), progress=False)) for t in (0.0, 6.0, 12.0)]
         truth = bag.trajectory(GROUND_TRUTH_TOPIC)
-        odometry = bag.trajectory(ODOMETRY_TOPIC)
-        translation, quaternion = bag.static_transform("base_link", "camera_pose_frame")
+        tracked = tracking_path(bag, load_config().fusion).compose((truth.rotations[0], truth.positions[0]))
     fig = Figure(figsize=(13, 4.2))
     for ax, frame in zip(fig.subplots(1, 3), frames, strict=True):
         ax.imshow(frame.image, cmap="gray", vmin=0, vmax=255)
@@ -73,9 +71,6 @@ def sample_recording_figures(out: Path) -> list[Path]:
     frames_png = out / "sample_frames.png"
     fig.savefig(frames_png, dpi=90, bbox_inches="tight")
 
-    tracked = base_from_sensor_odometry(
-        odometry, (Rotation.from_quat(quaternion), translation), (truth.rotations[0], truth.positions[0])
-    )
     fig = Figure(figsize=(7, 5))
     draw_paths({"ground truth": truth, "tracking camera's odometry": tracked}, ax=fig.subplots())
     paths_png = out / "sample_paths.png"
@@ -95,13 +90,7 @@ def sample_odometry(out: Path) -> list[Path]:
     tum, summary = result.write(out / "sample_gpo_exact.tum")
     with Recording(bag) as recorded:
         truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
-    estimate = result.trajectory
-    first = min(range(len(truth)), key=lambda i: abs(int(truth.stamps_ns[i]) - int(estimate.stamps_ns[0])))
-    placed = estimate.compose((truth.rotations[first], truth.positions[first]), frame_id="world")
-    fig = Figure(figsize=(7, 5))
-    draw_paths({"ground truth": truth, "Ground Plane Odometry (gpo-exact)": placed}, ax=fig.subplots())
-    plot = out / "sample_gpo_exact.png"
-    fig.savefig(plot, dpi=110, bbox_inches="tight")
+    plot = save_evaluation_plot(evaluate(result.trajectory, truth, "origin"), out / "sample_gpo_exact.png")
     return [tum, summary, plot]
 
 

@@ -202,7 +202,8 @@ class FloorOdometer:
         self._velocity = np.zeros(3)  # the last measured increment per second (dx, dy, dtheta)
 
     def floor_image(self, image: np.ndarray) -> np.ndarray:
-        """The frame's floor image (8-bit grey); a clear error when its size is not the calibration's."""
+        """The floor image (8-bit) of a grey frame (mono8, or mono16 taken to its upper 8 bits; ``Recording.frames``
+        with ``gray=True`` turns colour to grey); a clear error when its size is not the calibration's."""
         width, height = self.table.source_size
         if image.shape[:2] != (height, width):
             raise ValueError(
@@ -211,8 +212,6 @@ class FloorOdometer:
             )
         if image.dtype == np.uint16:
             image = (image >> 8).astype(np.uint8)
-        if image.ndim == 3:
-            image = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY if image.shape[2] == 3 else cv2.COLOR_RGBA2GRAY)
         return self.table.apply(image)
 
     def step(self, stamp_ns: int, image: np.ndarray) -> FrameRecord:
@@ -364,7 +363,7 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
         started = time.perf_counter()
         error = None
         try:
-            for frame in recording.frames(topic, progress=progress):
+            for frame in recording.frames(topic, gray=True, progress=progress):
                 records.append(odometer.step(frame.stamp_ns, frame.image))
         except (ValueError, KeyError, OSError) as failure:
             if not records:
