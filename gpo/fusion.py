@@ -6,9 +6,10 @@ noise (``ProcessNoise``); the pose moves along the exact arc they describe (``gp
 and the covariance through the Jacobian of that motion.
 
 Every source is used **differentially**, like robot_localization's differential mode: a source's pose increment
-over its own interval dt (already turned into base_link, see ``base_increment``) becomes a measurement of
-(v, omega) = (arc length / dt, turn / dt). Absolute poses that drift (a tracking camera's odometry) therefore
-never pull the filter's pose, only their motion counts, weighted by the covariance each measurement carries.
+over its own interval dt (already turned into base_link: ``gpo.trajectory.base_from_sensor_odometry``) becomes a
+measurement of (v, omega) = (arc length / dt, turn / dt). Absolute poses that drift (a tracking camera's odometry)
+therefore never pull the filter's pose, only their motion counts, weighted by the covariance each measurement
+carries.
 Measurements must come in time order; ``OdometryFusion.add`` refuses stale ones (earlier than the filter's time)
 and the caller decides what to skip.
 """
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from gpo.kinematics import arc_increment, between, compose
+from gpo.kinematics import arc_increment, between
 from gpo.trajectory import Trajectory
 
 STATE = ("x", "y", "theta", "v", "omega")
@@ -140,13 +141,6 @@ class OdometryFusion:
         covariance = self._filter.P
         if not np.isfinite(covariance).all() or np.linalg.eigvalsh(0.5 * (covariance + covariance.T))[0] < -1e-12:
             raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer positive definite")
-
-
-def base_increment(sensor_increment, sensor_in_base) -> np.ndarray:
-    """A sensor frame's planar increment (dx, dy, dtheta) turned into base_link's: T_BS Delta_S T_BS^-1, with
-    ``sensor_in_base`` the sensor's planar pose (x, y, yaw) in base_link."""
-    mount = np.asarray(sensor_in_base, dtype=float)
-    return compose(compose(mount, sensor_increment), between(mount, np.zeros(3)))
 
 
 @dataclass(frozen=True)

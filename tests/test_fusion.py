@@ -6,8 +6,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.stats import chi2
 
-from gpo.fusion import FilterDiverged, OdometryFusion, ProcessNoise, base_increment, velocity_measurement
-from gpo.kinematics import arc_increment, between, compose
+from gpo.fusion import FilterDiverged, OdometryFusion, ProcessNoise, velocity_measurement
+from gpo.kinematics import arc_increment
 
 
 @given(st.floats(-1.0, 1.0), st.floats(-2.0, 2.0), st.floats(0.005, 0.1))
@@ -15,14 +15,6 @@ def test_velocity_measurement_inverts_an_arc(v, omega, dt):
     measured = velocity_measurement(arc_increment(v, omega, dt), dt)
     expected = [v if abs(v) > 1e-12 else 0.0, omega]
     np.testing.assert_allclose(measured, expected, atol=1e-9)
-
-
-@given(st.floats(-0.5, 0.5), st.floats(-0.2, 0.2), st.floats(-3.0, 3.0), st.floats(-0.05, 0.05), st.floats(-0.3, 0.3))
-def test_base_increment_moves_the_sensor_with_the_robot(mx, my, myaw, v, turn):
-    mount = np.array([mx, my, myaw])
-    robot = arc_increment(v, turn, 1.0)
-    sensor = between(mount, compose(robot, mount))  # where the sensor went, in its own starting frame
-    np.testing.assert_allclose(base_increment(sensor, mount), robot, atol=1e-12)
 
 
 def _drive(seconds=6.0, rate_hz=30.0, v=0.4, omega=0.3, sigma=(0.02, 0.02), seed=0):
