@@ -324,6 +324,26 @@ class GroundPlaneImage:
         build = functools.partial(self.to_fisheye, self.floor.pixel_centres())
         return _cached_table(description, self.floor, self.cubemap.camera, build, self.cache)
 
+    def resampled(self, floor: FloorImage, max_outside: float = 0.0) -> RemapTable:
+        """The GPI resampled onto the grid of ``floor`` **by the GPI's own placement**: each of its pixels shows the
+        GPI at the point ``self.floor`` (approximate) says is that floor point. So the image has ``floor``'s size
+        and scale, and is exactly as metric as the plain GPI (``metric`` False): what a method sees when it takes
+        the GPI's scale and place for true. Raises ``GroundImageError`` beyond ``max_outside`` unseen."""
+        nominal = FloorImage(floor.width, floor.height, floor.affine, metric=False)
+        description = {
+            "route": "gpi-resampled",
+            "face_size": self.cubemap.face_size,
+            "homography": self.homography.tolist(),
+            "rows": [self.front_rows, self.bottom_rows],
+            "gpi_floor": self.floor.description(),
+        }
+        gpi_uv = self.floor.base_to_pixel(nominal.pixel_to_base(nominal.pixel_centres()))
+        table = _cached_table(
+            description, nominal, self.cubemap.camera, functools.partial(self.to_fisheye, gpi_uv), self.cache
+        )
+        _check_extent(table, "the GPI (the front face's floor ahead, the bottom face's crop)", max_outside)
+        return table
+
     def staged(self, fisheye_image: np.ndarray) -> np.ndarray:
         """The GPI the paper's way: the faces remapped from the fisheye, the front face warped by
         ``cv2.warpPerspective`` (eq. 22), the bottom face's crop stacked below; two resamplings."""

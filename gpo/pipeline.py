@@ -42,12 +42,14 @@ from gpo.bag import Recording, StampWarning
 from gpo.config import load_rig, rig_to_dict
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
 from gpo.fusion import FusionSettings, fuse
-from gpo.ground import FloorImage, analytic_table
+from gpo.ground import FloorImage, RemapTable, analytic_table, ground_plane_image, ortho_rectify
 from gpo.kinematics import PaperBicycle, compose, increment_from_point_motion, increment_from_point_pairs
 from gpo.rig import Rig
+from gpo.targets import Chessboard, FloorBoard
 from gpo.trajectory import Trajectory, base_from_sensor_odometry
 
 FLOOR_METHODS = ("gpo", "gpo-exact", "gpo-rigid")
+ROUTES = ("analytic", "ortho-gpi", "gpi")
 METHODS = (*FLOOR_METHODS, "fused")
 VECTORS = ("median", "mean")
 RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
@@ -62,8 +64,13 @@ ODOMETRY_FLOOR_IMAGE = FloorImage.top_view((0.70, 0.90), (-0.10, 0.10), ODOMETRY
 class OdometryConfig:
     """Everything a run needs: the ``rig``, the ``floor`` image, the KLT ``klt`` parameters, the paper's bicycle
     ``model``, the ``method`` (one of ``METHODS``), the ``vector`` statistic (median or mean; for ``gpo`` and
-    ``gpo-exact``), ``max_gap_s``, the longest time the robot coasts or a frame gap is bridged, seconds, and the
-    ``fusion`` settings of the ``fused`` method."""
+    ``gpo-exact``), ``max_gap_s``, the longest time the robot coasts or a frame gap is bridged, seconds, the
+    ``fusion`` settings of the ``fused`` method, and the ``route`` that makes the floor image (``floor_table``):
+
+    - ``analytic``: each floor point projected through the calibrated camera from the rig's mount (no chessboard);
+    - ``ortho-gpi``: the first paper's chessboard route, fisheye -> cubemap -> GPI -> ortho-GPI, calibrated on
+      ``board_image``, a frame of the chessboard ``board`` lying on the floor where ``board`` says;
+    - ``gpi``: the plain GPI of the same frame, its own approximate scale and place taken for true."""
 
     rig: Rig
     floor: FloorImage
@@ -73,8 +80,15 @@ class OdometryConfig:
     vector: str = "median"
     max_gap_s: float = 0.5
     fusion: FusionSettings = field(default_factory=FusionSettings)
+    route: str = "analytic"
+    board_image: Path | None = None
+    board: FloorBoard | None = None
 
     def __post_init__(self):
+        if self.route not in ROUTES:
+            raise ValueError(f"unknown route {self.route!r}; the routes are {', '.join(ROUTES)}")
+        if self.route != "analytic" and (self.board_image is None or self.board is None):
+            raise ValueError(f"the {self.route} route needs board_image (a frame of the floor board) and board")
         if self.method not in METHODS:
             raise ValueError(f"unknown method {self.method!r}; the methods are {', '.join(METHODS)}")
         if self.fusion.floor_method not in FLOOR_METHODS:
@@ -103,7 +117,9 @@ def load_config(path=None) -> OdometryConfig:
     path = Path(path)
     document = yaml.safe_load(path.read_text()) or {}
     rig = load_rig(path)
-    floor = _floor_image(document.get("floor_image", {}), path)
+    floor_section = document.get("floor_image", {})
+    floor = _floor_image(floor_section, path)
+    route = _route(floor_section, path)
     klt = _dataclass_section(KLTParameters, document.get("klt", {}), path, "klt")
     kinematics = document.get("kinematics")
     model = None
@@ -112,7 +128,7 @@ def load_config(path=None) -> OdometryConfig:
     odometry = document.get("odometry", {})
     fusion = _dataclass_section(FusionSettings, document.get("fusion", {}), path, "fusion")
     try:
-        return OdometryConfig(rig, floor, klt, model, **odometry, fusion=fusion)
+        return OdometryConfig(rig, floor, klt, model, **odometry, fusion=fusion, **route)
     except TypeError as error:
         raise ValueError(f"{path}: odometry: {error}; its keys are method, vector, max_gap_s") from None
 
@@ -126,6 +142,7 @@ def config_to_dict(config: OdometryConfig) -> dict:
             "x_range_m": [round(x_min, 9), round(x_max, 9)],
             "y_range_m": [round(y_min, 9), round(y_max, 9)],
             "metres_per_pixel": round(config.floor.metres_per_pixel, 12),
+            **_route_to_dict(config),
         },
         "klt": {f.name: getattr(config.klt, f.name) for f in fields(config.klt)},
         "kinematics": {
@@ -154,6 +171,58 @@ def _floor_image(section: dict, path: Path) -> FloorImage:
         )
     except ValueError as error:
         raise ValueError(f"{path}: floor_image: {error}") from None
+
+
+def _route(section: dict, path: Path) -> dict:
+    """The floor image's ``route`` and, for the chessboard routes, ``board_image`` (relative to the config file)
+    and ``board`` (squares, square_m, margin_m, x_m, y_m, yaw_deg: where it lay in base_link)."""
+    route = {"route": section.get("route", "analytic")}
+    if "board_image" in section:
+        route["board_image"] = path.parent / section["board_image"]
+    if "board" in section:
+        board = section["board"]
+        try:
+            chessboard = Chessboard(tuple(board["squares"]), float(board["square_m"]), float(board["margin_m"]))
+            route["board"] = FloorBoard(
+                chessboard, float(board["x_m"]), float(board["y_m"]), math.radians(board["yaw_deg"])
+            )
+        except (KeyError, TypeError) as error:
+            keys = "squares, square_m, margin_m, x_m, y_m, yaw_deg"
+            raise ValueError(f"{path}: floor_image: board: {error!r}; its keys are {keys}") from None
+    return route
+
+
+def _route_to_dict(config: OdometryConfig) -> dict:
+    if config.route == "analytic":
+        return {}
+    board = config.board
+    return {
+        "route": config.route,
+        "board_image": str(config.board_image),
+        "board": {
+            "squares": list(board.board.squares),
+            "square_m": board.board.square,
+            "margin_m": board.board.margin,
+            "x_m": board.x,
+            "y_m": board.y,
+            "yaw_deg": math.degrees(board.yaw),
+        },
+    }
+
+
+def floor_table(config: OdometryConfig) -> RemapTable:
+    """The one remap table from the camera to ``config.floor`` along ``config.route`` (up to half of the floor
+    image may lie outside the view; those pixels are masked)."""
+    camera, floor = config.rig.camera, config.floor
+    if config.route == "analytic":
+        return analytic_table(camera, config.rig.mount, floor, max_outside=0.5)
+    image = cv2.imread(str(config.board_image), cv2.IMREAD_GRAYSCALE)
+    if image is None:
+        raise ValueError(f"cannot read the floor board's image {config.board_image} (the {config.route} route)")
+    gpi = ground_plane_image(image, camera, config.board)
+    if config.route == "gpi":
+        return gpi.resampled(floor, max_outside=0.5)
+    return ortho_rectify(gpi, gpi.table.apply(image), config.board, floor, max_outside=0.5).table
 
 
 def _dataclass_section(kind, section: dict, path: Path, name: str):
@@ -191,8 +260,7 @@ class FloorOdometer:
 
     def __init__(self, config: OdometryConfig):
         self.config = config
-        rig = config.rig
-        self.table = analytic_table(rig.camera, rig.mount, config.floor, max_outside=0.5)
+        self.table = floor_table(config)
         self.flow = FloorFlow(config.klt, mask=self.table.valid)
         affine = config.floor.affine
         self._to_metres = affine[:, :2].T.copy(), affine[:, 2].copy()
