@@ -102,10 +102,7 @@ def print_run(result: OdometryResult) -> None:
         f"({summary['frames_per_second']} frames/s), method {summary['method']}, {summary['vector']} vector"
     )
     print(f"distance travelled: {summary['distance_m']:.3f} m over {summary['duration_s']:.1f} s")
-    print(
-        "frames: "
-        + ", ".join(f"{summary[f'frames_{s}']} {s}" for s in ("measured", "coasted", "held", "skipped"))
-    )
+    print("frames: " + ", ".join(f"{summary[f'frames_{s}']} {s}" for s in ("measured", "coasted", "held", "skipped")))
     for reason, count in summary["flags"].items():
         print(f"  flagged {count}: {reason}")
     if result.error:

@@ -70,13 +70,15 @@ def process_covariance(state: np.ndarray, dt: float, noise: ProcessNoise) -> np.
 
 
 def velocity_measurement(increment, dt: float) -> np.ndarray:
-    """(v, omega) of a base_link increment (dx, dy, dtheta) over ``dt`` seconds, as the arc through it: the arc
-    length over dt (signed by the direction of travel) and the turn over dt."""
+    """(v, omega) of a base_link increment (dx, dy, dtheta) over ``dt`` seconds, as the arc through it: the turn
+    over dt, and the arc length over dt, from the step's component along the chord an arc of that turn would have
+    (at half the turn: ``gpo.kinematics.arc_increment``). Exact for an arc; a step's sideways noise then leaves the
+    speed unbiased, where the step's length (always longer than its projection) would read it too fast."""
     dx, dy, turn = (float(value) for value in increment)
-    chord = np.hypot(dx, dy)
     half = 0.5 * turn
-    arc = chord if abs(half) < 1e-9 else chord * half / np.sin(half)
-    return np.array([np.sign(dx) * arc / dt if chord > 0 else 0.0, turn / dt])
+    along = dx * np.cos(half) + dy * np.sin(half)
+    arc = along if abs(half) < 1e-9 else along * half / np.sin(half)
+    return np.array([arc / dt, turn / dt])
 
 
 class OdometryFusion:
@@ -139,67 +141,96 @@ class OdometryFusion:
 
     def _check(self) -> None:
         covariance = self._filter.P
-        if not np.isfinite(covariance).all() or np.linalg.eigvalsh(0.5 * (covariance + covariance.T))[0] < -1e-12:
-            raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer positive definite")
+        try:
+            np.linalg.cholesky(0.5 * (covariance + covariance.T) + 1e-12 * np.eye(5))
+        except np.linalg.LinAlgError:
+            raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer positive definite") from None
+        if not np.isfinite(covariance).all():
+            raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer finite")
 
 
 @dataclass(frozen=True)
 class FusionSettings:
     """What ``--method fused`` fuses: the floor odometry of ``floor_method`` with a tracking camera's own odometry on
     ``tracking_topic`` (nav_msgs/Odometry of ``tracking_frame``, whose pose in base_link the bag's /tf_static holds).
-    Each source's increments are (v, omega) measurements with these standard deviations (m/s, rad/s); the process
-    noise is ``ProcessNoise(accel_mps2, angular_accel_radps2)``."""
+    Each source's increments are (v, omega) measurements with these standard deviations (m/s, rad/s); a floor frame
+    whose flow kept fewer than ``floor_reference_inliers`` inlier tracks has its variance scaled up by
+    reference / inliers (the median of n tracks scatters as 1 / sqrt(n)). The process noise is
+    ``ProcessNoise(accel_mps2, angular_accel_radps2)``."""
 
     floor_method: str = "gpo"
     tracking_topic: str = "/camera/odom/sample"
     tracking_frame: str = "camera_pose_frame"
-    floor_speed_sigma_mps: float = 0.005
+    floor_speed_sigma_mps: float = 0.002
     floor_turn_sigma_radps: float = 0.03
     tracking_speed_sigma_mps: float = 0.15
     tracking_turn_sigma_radps: float = 0.15
-    accel_mps2: float = 0.5
-    angular_accel_radps2: float = 1.0
+    floor_reference_inliers: int = 60
+    accel_mps2: float = 0.1
+    angular_accel_radps2: float = 0.3
 
 
-def fuse(floor: Trajectory, measured: np.ndarray, tracking: Trajectory, settings: FusionSettings) -> Trajectory:
-    """The EKF's path of base_link at the floor odometry's stamps.
+@dataclass(frozen=True)
+class FusedPath:
+    """The EKF's ``trajectory`` of base_link (odom), the state's ``covariances`` (N, 5, 5) at its poses, and how many
+    measurements were ``refused`` as outliers."""
 
-    ``floor``: the floor odometry's base_link poses; ``measured`` (N,) bool: whether the step into each pose was
-    measured (coasted and held steps are not fused). ``tracking``: the tracking camera's odometry already turned
-    into base_link poses (``gpo.trajectory.base_from_sensor_odometry``); only its increments are used.
+    trajectory: Trajectory
+    covariances: np.ndarray
+    refused: int
+
+
+def fuse(floor: Trajectory, inliers: np.ndarray, tracking: Trajectory, settings: FusionSettings) -> FusedPath:
+    """The EKF's path of base_link at the floor odometry's stamps, with its covariance.
+
+    ``floor``: the floor odometry's base_link poses; ``inliers`` (N,): the flow's inlier tracks behind the step into
+    each pose, 0 where the step was not measured (coasted and held steps are not fused). ``tracking``: the tracking
+    camera's odometry already turned into base_link poses (``gpo.trajectory.base_from_sensor_odometry``); only its
+    increments are used. Both may hold repeated or unordered stamps: steps that do not move forward in time are
+    left out, and the sources' steps are fused in time order.
     """
+    inliers = np.asarray(inliers, dtype=float)
+    if inliers.shape != (len(floor),):
+        raise ValueError(f"inliers must have one count per floor pose ({len(floor)}), got shape {inliers.shape}")
     floor_covariance = np.diag([settings.floor_speed_sigma_mps, settings.floor_turn_sigma_radps]) ** 2
     tracking_covariance = np.diag([settings.tracking_speed_sigma_mps, settings.tracking_turn_sigma_radps]) ** 2
+    measured = inliers[1:] > 0
+    floor_scale = np.maximum(1.0, settings.floor_reference_inliers / np.where(measured, inliers[1:], 1.0))
     events = [
-        *_increments(floor, floor_covariance, measured[1:]),
-        *_increments(tracking, tracking_covariance, np.ones(max(len(tracking) - 1, 0), bool)),
+        *_increments(floor, floor_covariance * floor_scale[:, None, None], measured),
+        *_increments(tracking, np.broadcast_to(tracking_covariance, (max(len(tracking) - 1, 0), 2, 2)), None),
     ]
     events.sort(key=lambda event: event[0])
     start = floor.times[0]
     fusion = OdometryFusion(start, ProcessNoise(settings.accel_mps2, settings.angular_accel_radps2))
     wanted = iter(floor.times[1:])
-    poses, next_time = [fusion.state[:3]], next(wanted, None)
+    poses, covariances, next_time = [fusion.state[:3]], [fusion.covariance], next(wanted, None)
     for time_s, increment, dt, covariance in events:
         while next_time is not None and next_time < time_s:
-            fusion.predict(next_time)
+            fusion.predict(max(next_time, fusion.time_s))
             poses.append(fusion.state[:3])
+            covariances.append(fusion.covariance)
             next_time = next(wanted, None)
         if time_s > start:
             fusion.add(time_s, increment, dt, covariance)
     while next_time is not None:
         fusion.predict(max(next_time, fusion.time_s))
         poses.append(fusion.state[:3])
+        covariances.append(fusion.covariance)
         next_time = next(wanted, None)
     poses = np.array(poses)
-    return Trajectory.from_planar(floor.stamps_ns, poses[:, 0], poses[:, 1], poses[:, 2], frame_id=floor.frame_id)
+    trajectory = Trajectory.from_planar(floor.stamps_ns, *poses.T, frame_id=floor.frame_id)
+    return FusedPath(trajectory, np.array(covariances), fusion.refused)
 
 
-def _increments(trajectory: Trajectory, covariance: np.ndarray, use: np.ndarray):
-    """(end time s, base_link increment, dt s, covariance) of each step of ``trajectory`` where ``use`` is True."""
+def _increments(trajectory: Trajectory, covariances: np.ndarray, use: np.ndarray | None):
+    """(end time s, base_link increment, dt s, covariance) of each step of ``trajectory`` that moves forward in time
+    and where ``use`` (None: everywhere) is True; ``covariances`` (N - 1, 2, 2), one per step."""
     planar = np.column_stack([trajectory.positions[:, :2], np.unwrap(trajectory.yaw)])
     steps = between(planar[:-1], planar[1:])
     times = trajectory.times
+    forward = np.diff(times) > 0
     return [
-        (times[k + 1], steps[k], times[k + 1] - times[k], covariance)
-        for k in np.flatnonzero(use & (np.diff(times) > 0))
+        (times[k + 1], steps[k], times[k + 1] - times[k], covariances[k])
+        for k in np.flatnonzero(forward if use is None else use & forward)
     ]

@@ -439,7 +439,7 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
             error = f"after {len(records)} frames: {failure}"
         result = OdometryResult(records, time.perf_counter() - started, config, str(bag), topic, error)
         if fused:
-            result.fused = _fused_path(recording, result, config.fusion)
+            result.fused = fused_path(recording, result, config.fusion)
             result.seconds = time.perf_counter() - started
     return result
 
@@ -453,10 +453,12 @@ def tracking_path(recording: Recording, settings: FusionSettings) -> Trajectory:
     )
 
 
-def _fused_path(recording: Recording, result: OdometryResult, settings: FusionSettings) -> Trajectory:
-    """The EKF's path from the floor odometry of ``result`` and the recording's tracking-camera odometry."""
-    measured = np.array([r.status == "measured" for r in result.records if r.status != "skipped"])
-    return fuse(result.floor_trajectory, measured, tracking_path(recording, settings), settings)
+def fused_path(recording: Recording, result: OdometryResult, settings: FusionSettings) -> Trajectory:
+    """The EKF's path (``gpo.fusion.fuse``) from the floor odometry of ``result`` and the tracking-camera odometry
+    of ``recording`` (an open ``Recording``)."""
+    kept = [r for r in result.records if r.status != "skipped"]
+    inliers = np.array([r.inliers if r.status == "measured" else 0 for r in kept])
+    return fuse(result.floor_trajectory, inliers, tracking_path(recording, settings), settings).trajectory
 
 
 def _choose_topic(recording: Recording, topic: str | None, rig: Rig) -> str:

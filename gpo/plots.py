@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.ticker import FuncFormatter
 from matplotlib.transforms import Affine2D
 
 from gpo.camera import EUCM, Pinhole
@@ -380,4 +381,90 @@ def draw_bicycle(wheelbase_m: float, rear_to_reference_m: float, steering_rad: f
     ax.set_ylim(-0.68 * length, centre[1] + 0.2 * length)
     ax.set_xlabel("x forward [m]")
     ax.set_ylabel("y left [m]")
+    return ax
+
+
+def truth_poses(truth, times) -> np.ndarray:
+    """(N, 3) planar poses (x, y, unwrapped yaw) of ``truth`` (a ``Trajectory``) at ``times`` (seconds), linearly
+    interpolated between its poses (held at its ends)."""
+    yaw = np.unwrap(truth.yaw)
+    return np.column_stack([np.interp(times, truth.times, values) for values in (*truth.positions[:, :2].T, yaw)])
+
+
+def on_truth(estimate, truth):
+    """``estimate`` (a ``Trajectory``, in its own odometry frame) with its first pose placed on the truth's pose at its
+    first stamp: the papers' alignment, as ``gpo.metrics.final_error`` does it."""
+    from scipy.spatial.transform import Rotation
+
+    x, y, yaw = truth_poses(truth, estimate.times[:1])[0]
+    start = estimate.positions[0, :2], estimate.yaw[0]
+    turn = Rotation.from_euler("z", yaw - start[1])
+    shift = np.array([x, y, 0.0]) - turn.apply([*start[0], 0.0])
+    return estimate.compose((turn, shift), frame_id=truth.frame_id)
+
+
+def draw_paths_on_truth(paths: dict, truth, ax=None, styles: dict | None = None) -> plt.Axes:
+    """Top view of trajectories (label -> ``Trajectory``) against ``truth``, each placed on the truth at its first
+    stamp (``on_truth``); the truth a wide grey line, the start and each path's end marked."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 5))
+    styles = styles or {}
+    ax.plot(*truth.positions[:, :2].T, color="k", lw=5, alpha=0.2, label="truth")
+    for label, trajectory in paths.items():
+        placed = on_truth(trajectory, truth).positions[:, :2]
+        (line,) = ax.plot(*placed.T, label=label, **{"lw": 1.2, **styles.get(label, {})})
+        ax.plot(*placed[-1], "o", color=line.get_color(), ms=4)
+    ax.plot(*truth.positions[0, :2], "go", label="start")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return ax
+
+
+def draw_position_errors(paths: dict, truth, ax=None, styles: dict | None = None) -> plt.Axes:
+    """How far each trajectory (label -> ``Trajectory``), placed on the truth as ``draw_paths_on_truth`` does, is from
+    the truth along the way: millimetres against seconds since the truth's first stamp."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 4))
+    styles = styles or {}
+    for label, trajectory in paths.items():
+        placed = on_truth(trajectory, truth)
+        apart = np.hypot(*(placed.positions[:, :2] - truth_poses(truth, placed.times)[:, :2]).T)
+        ax.plot(placed.times - truth.times[0], 1e3 * apart, label=label, **{"lw": 1.2, **styles.get(label, {})})
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("position error [mm]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return ax
+
+
+def draw_nees(
+    times, nees, dof: int = 3, confidence: float = 0.95, ax=None, label: str = "NEES", runs: int = 1
+) -> plt.Axes:
+    """The normalised estimation error squared against time (seconds), on a log scale, between the two-sided
+    ``confidence`` bounds of chi-square with ``dof`` degrees of freedom (shaded), with its mean and the share of
+    values inside the bounds in the legend. With ``runs`` > 1, ``nees`` is the average over that many independent
+    runs, and the bounds are those of chi-square with ``dof * runs`` degrees of freedom divided by ``runs``."""
+    from scipy.stats import chi2
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(9, 3.5))
+    nees = np.asarray(nees, dtype=float)
+    low, high = chi2.ppf([(1 - confidence) / 2, (1 + confidence) / 2], dof * runs) / runs
+    inside = np.mean((nees >= low) & (nees <= high))
+    bounds = f"chi-square {dof} dof, {confidence:.0%} bounds" + (f" for the mean of {runs}" if runs > 1 else "")
+    ax.axhspan(low, high, color="tab:green", alpha=0.12, label=bounds)
+    ax.axhline(dof, color="tab:green", lw=0.8, ls="--", label=f"expected mean {dof}")
+    ax.plot(times, nees, lw=1, color="tab:blue", label=f"{label}: mean {nees.mean():.2f}, {inside:.0%} inside")
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    bottom, top = ax.get_ylim()
+    if top < 10 * bottom:  # less than a decade shown: label the minor ticks too, plainly
+        ax.yaxis.set_minor_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("NEES")
+    ax.grid(True, alpha=0.3, which="both")
+    ax.legend(fontsize="small")
     return ax

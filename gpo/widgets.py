@@ -14,6 +14,7 @@ from gpo.calibrate import CalibrationError, calibrate_corners
 from gpo.camera import EUCM, T265_LIKE
 from gpo.cubemap import Cubemap, default_face_size
 from gpo.flow import FloorFlow, KLTParameters
+from gpo.fusion import FilterDiverged, FusionSettings, fuse
 from gpo.ground import (
     FloorImage,
     GroundImageError,
@@ -31,12 +32,15 @@ from gpo.kinematics import (
     integrate,
     paper_heading_rate_ratio,
 )
+from gpo.metrics import final_error
 from gpo.mount import floor_angles
 from gpo.plots import (
     draw_floor_image,
     draw_flow_scatter,
     draw_flow_vectors,
     draw_heading_rate_ratio,
+    draw_paths_on_truth,
+    draw_position_errors,
     draw_residuals,
     draw_room_in_image,
     draw_view_errors,
@@ -521,6 +525,70 @@ def bicycle_panel(wheelbase_m: float = 0.8, rear_to_reference_m: float = 0.8, ra
         print(
             f"eq. 30 turns {ratio:.3f}x as fast as the robot, eq. 26's chord {100 * chord:+.2f} % a frame at "
             f"{rate_hz:.0f} Hz; the paper's model ends {apart:.3f} m from the exact path, heading {turned:+.2f} deg"
+        )
+        plt.show()
+
+    sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
+    return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+FUSION_SLIDERS = {  # FusionSettings field -> (slider label, log10 of its lowest and highest value)
+    "floor_speed_sigma_mps": ("floor sigma v [m/s]", -4.0, 0.0),
+    "floor_turn_sigma_radps": ("floor sigma omega [rad/s]", -4.0, 0.0),
+    "tracking_speed_sigma_mps": ("camera sigma v [m/s]", -3.0, 1.0),
+    "tracking_turn_sigma_radps": ("camera sigma omega [rad/s]", -3.0, 1.0),
+    "accel_mps2": ("accel [m/s^2/sqrt(Hz)]", -2.0, 2.0),
+    "angular_accel_radps2": ("angular accel [rad/s^2/sqrt(Hz)]", -2.0, 2.0),
+}
+
+
+def fusion_panel(floor, tracking, truth, settings: FusionSettings | None = None) -> widgets.VBox:
+    """The EKF's noise parameters on log-scale sliders (``FUSION_SLIDERS``): the sigmas of the floor's and the tracking
+    camera's (v, omega) measurements and the process noise; on each release ``gpo.fusion.fuse`` runs again.
+
+    ``floor``: the floor odometry with its flow's inlier counts (a ``gpo.sim.table4.FloorRun``, or anything with its
+    ``trajectory`` and ``inliers``); ``tracking``: the tracking camera's path of base_link; ``truth``: the true path;
+    ``settings``: the ``FusionSettings`` the sliders start from (default: the package's). Left, the three paths placed
+    on the truth at their first pose; right, their position error along the way. One line reads out the fused path's
+    final error (``gpo.metrics.final_error``) and how many measurements the NIS gate refused.
+    """
+    base = settings or FusionSettings()
+    style = {"description_width": "initial"}
+    controls = {
+        name: widgets.FloatLogSlider(
+            value=getattr(base, name),
+            base=10,
+            min=low,
+            max=high,
+            step=0.1,
+            description=label,
+            readout_format=".2g",
+            continuous_update=False,
+            style=style,
+        )
+        for name, (label, low, high) in FUSION_SLIDERS.items()
+    }
+    sources = {"tracking camera": tracking, "floor": floor.trajectory}
+    styles = {"tracking camera": {"color": "tab:orange"}, "floor": {"color": "tab:blue"}, "fused": {"color": "tab:red"}}
+
+    def redraw(**sigmas: float) -> None:
+        chosen = dataclasses.replace(base, **sigmas)
+        plt.close("all")
+        try:
+            fused = fuse(floor.trajectory, floor.inliers, tracking, chosen)
+        except FilterDiverged as error:
+            print(f"no fused path: {error}")
+            return
+        paths = {**sources, "fused": fused.trajectory}
+        _, (left, right) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1, 1.2]})
+        draw_paths_on_truth(paths, truth, ax=left, styles=styles)
+        left.set_title("the paths, each placed on the truth at its start")
+        draw_position_errors(paths, truth, ax=right, styles=styles)
+        right.set_title("how far from the truth, along the way")
+        error = final_error(fused.trajectory, truth)
+        print(
+            f"fused: final error {1e3 * error.position_m:.1f} mm ({error.percent:.2f} % of {error.distance_m:.2f} m), "
+            f"heading {math.degrees(error.heading_rad):+.2f} deg; the NIS gate refused {fused.refused} measurement(s)"
         )
         plt.show()
 

@@ -6,8 +6,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.stats import chi2
 
-from gpo.fusion import FilterDiverged, OdometryFusion, ProcessNoise, velocity_measurement
-from gpo.kinematics import arc_increment
+from gpo.fusion import FilterDiverged, FusionSettings, OdometryFusion, ProcessNoise, fuse, velocity_measurement
+from gpo.kinematics import arc_increment, integrate
+from gpo.trajectory import Trajectory
 
 
 @given(st.floats(-1.0, 1.0), st.floats(-2.0, 2.0), st.floats(0.005, 0.1))
@@ -53,8 +54,12 @@ def test_two_sources_at_different_rates_beat_either():
     sources = {"floor": (30.0, 0.03), "camera": (200.0, 0.08)}
     errors = {}
     for used in (("floor",), ("camera",), ("floor", "camera")):
-        events = sorted((k / rate, name) for name in used for k in range(1, round(seconds * sources[name][0]) + 1)
-                        for rate in [sources[name][0]])
+        events = sorted(
+            (k / rate, name)
+            for name in used
+            for k in range(1, round(seconds * sources[name][0]) + 1)
+            for rate in [sources[name][0]]
+        )
         fusion = OdometryFusion(0.0)
         for time_s, name in events:
             rate, sigma = sources[name]
@@ -80,3 +85,102 @@ def test_a_broken_covariance_is_reported_not_carried_on():
     fusion._filter.P[3, 3] = np.nan
     with pytest.raises(FilterDiverged):
         fusion.predict(0.1)
+
+
+# fuse(): a floor odometry and a tracking camera's path against an exact arc
+
+ARC_V, ARC_OMEGA, ARC_SECONDS = 0.4, 0.3, 6.0
+
+
+def _arc_path(rate_hz, sigma=(0.0, 0.0), scale=1.0, seed=0, wrong_step=None):
+    """base_link's path along the constant arc sampled at ``rate_hz`` (stamps from 0 s): each step's (v, omega) with
+    white noise ``sigma``, its length scaled by ``scale`` (a scale error), and step ``wrong_step`` (an index) replaced
+    by a jump of 0.3 m sideways and 1 rad."""
+    rng = np.random.default_rng(seed)
+    steps = round(ARC_SECONDS * rate_hz)
+    velocities = np.array([ARC_V, ARC_OMEGA]) + rng.standard_normal((steps, 2)) * sigma
+    increments = arc_increment(velocities[:, 0], velocities[:, 1], 1 / rate_hz)
+    increments[:, :2] *= scale
+    if wrong_step is not None:
+        increments[wrong_step] = [0.02, 0.3, 1.0]
+    stamps = np.round(np.arange(steps + 1) / rate_hz * 1e9).astype(np.int64)
+    return Trajectory.from_planar(stamps, *integrate(increments).T, frame_id="odom")
+
+
+def _measured(floor):
+    inliers = np.full(len(floor), 100)
+    inliers[0] = 0  # the first pose has no step behind it
+    return inliers
+
+
+def _final_position_error(trajectory):
+    return float(np.hypot(*(trajectory.positions[-1, :2] - arc_increment(ARC_V, ARC_OMEGA, ARC_SECONDS)[:2])))
+
+
+def test_fused_path_beats_a_tracker_with_a_scale_error_and_its_covariance_grows():
+    floor = _arc_path(30.0, sigma=(0.003, 0.01), seed=1)
+    tracker = _arc_path(200.0, sigma=(0.02, 0.02), scale=1.03, seed=2)  # 3 % too long: 6 cm after 6 s
+    fused = fuse(floor, _measured(floor), tracker, FusionSettings())
+    assert fused.trajectory.stamps_ns.tolist() == floor.stamps_ns.tolist()
+    assert fused.refused == 0
+    assert _final_position_error(tracker) > 0.05
+    assert _final_position_error(fused.trajectory) < 0.3 * _final_position_error(tracker)
+    pose = fused.covariances[:, :3, :3]
+    assert fused.covariances.shape == (len(floor), 5, 5)
+    np.testing.assert_allclose(pose, np.transpose(pose, (0, 2, 1)), rtol=0, atol=1e-15)
+    assert np.linalg.eigvalsh(pose[1:]).min() > 0  # positive definite after the first step
+    assert (np.diff(np.trace(pose[:, :2, :2], axis1=1, axis2=2)) > 0).all()  # velocities only: the position drifts
+    assert (np.diff(np.linalg.det(pose[1:])) > 0).all()
+
+
+def test_floor_steps_without_inliers_are_not_fused():
+    tracker = _arc_path(200.0, sigma=(0.02, 0.02), seed=2)
+    good, wrong = _arc_path(30.0, seed=1), _arc_path(30.0, seed=1, wrong_step=90)  # pose 91 on: 0.3 m aside
+    inliers = _measured(good)
+    inliers[91] = 0  # the step into pose 91 was flagged
+    left_out = fuse(good, inliers, tracker, FusionSettings())
+    flagged = fuse(wrong, inliers, tracker, FusionSettings())
+    np.testing.assert_allclose(flagged.trajectory.positions, left_out.trajectory.positions, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(flagged.covariances, left_out.covariances, rtol=0, atol=1e-15)
+    assert flagged.refused == 0  # not offered to the filter at all, so not refused by its gate either
+    assert _final_position_error(flagged.trajectory) < 0.01
+    offered = fuse(wrong, _measured(wrong), tracker, FusionSettings())  # the same step fused: refused as an outlier
+    assert offered.refused == 1
+
+
+def test_repeated_and_out_of_order_tracker_stamps_are_skipped():
+    floor = _arc_path(30.0, sigma=(0.003, 0.01), seed=1)
+    tracker = _arc_path(200.0, sigma=(0.02, 0.02), seed=2)
+    clean = fuse(floor, _measured(floor), tracker, FusionSettings())
+
+    repeat = np.sort(np.r_[np.arange(len(tracker)), [100, 100, 500]])  # three messages sent again
+    repeated = Trajectory(tracker.stamps_ns[repeat], tracker.positions[repeat], tracker.quaternions[repeat])
+    again = fuse(floor, _measured(floor), repeated, FusionSettings())
+    np.testing.assert_allclose(again.trajectory.positions, clean.trajectory.positions, rtol=0, atol=1e-12)
+
+    shuffled = np.r_[np.arange(300), 301, 300, np.arange(302, len(tracker))]  # two messages swapped
+    with pytest.raises(ValueError, match="backwards"):
+        Trajectory(tracker.stamps_ns[shuffled], tracker.positions[shuffled], tracker.quaternions[shuffled])
+    swapped = _Path(tracker.times[shuffled], tracker.positions[shuffled], tracker.yaw[shuffled])
+    unordered = fuse(floor, _measured(floor), swapped, FusionSettings())
+    assert np.isfinite(unordered.trajectory.positions).all()
+    np.testing.assert_allclose(unordered.trajectory.positions, clean.trajectory.positions, rtol=0, atol=2e-3)
+
+
+class _Path:
+    """A path as a reader might hand it over before any checks: ``times``, ``positions`` and ``yaw`` as they came."""
+
+    def __init__(self, times, positions, yaw):
+        self.times, self.positions, self.yaw = times, positions, yaw
+
+    def __len__(self):
+        return len(self.times)
+
+
+def test_inliers_must_match_the_floor_poses():
+    floor = _arc_path(30.0)
+    tracker = _arc_path(200.0)
+    with pytest.raises(ValueError, match=rf"one count per floor pose \({len(floor)}\)"):
+        fuse(floor, np.ones(len(floor) - 1), tracker, FusionSettings())
+    with pytest.raises(ValueError, match="inliers"):
+        fuse(floor, np.ones((len(floor), 1)), tracker, FusionSettings())
