@@ -2,7 +2,9 @@
 
 python -m gpo demo [--out DIR]    figures, tables and the sample recording's odometry, written to DIR
 python -m gpo run BAG --config RIG.yaml --out traj.tum [--method gpo|gpo-exact|gpo-rigid] [--topic T]
+python -m gpo run BAG ... --write-bag OUT.bag    also a copy of the bag with the estimate as nav_msgs/Odometry
 python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
+python -m gpo table4 [PATH ...]   the first paper's Table 4 (and the second's Table 2 metrics) on long1-3
 """
 
 from __future__ import annotations
@@ -13,13 +15,15 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from gpo.bag import POSE_TYPES, Recording, describe
+from gpo.bag import POSE_TYPES, Recording, copy_with_trajectory, describe
 from gpo.calibrate import main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run, tracking_path
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
 from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording, simulate, write_sample_data
+from gpo.sim.table4 import PATHS as TABLE4_PATHS
+from gpo.sim.table4 import reproduce_table4
 from gpo.trajectory import Trajectory
 
 
@@ -84,14 +88,20 @@ def sample_recording_figures(out: Path) -> list[Path]:
 
 
 def sample_odometry(out: Path) -> list[Path]:
-    """Ground Plane Odometry (``gpo-exact``) of the sample recording: trajectory, summary and a plot against truth."""
+    """The sample recording's odometry, ``gpo-exact`` alone and fused with the tracking camera by the EKF (the last
+    files: ``sample_fused.evaluation.txt``, its evaluation table): trajectories, summaries, plots against truth."""
     bag = recording("sample")
-    result = run(bag, load_config(), progress=False)
-    tum, summary = result.write(out / "sample_gpo_exact.tum")
     with Recording(bag) as recorded:
         truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
-    plot = save_evaluation_plot(evaluate(result.trajectory, truth, "origin"), out / "sample_gpo_exact.png")
-    return [tum, summary, plot]
+    written = []
+    for method, name in (("gpo-exact", "sample_gpo_exact"), ("fused", "sample_fused")):
+        result = run(bag, load_config().replace(method=method), progress=False)
+        written += result.write(out / f"{name}.tum")
+        evaluation = evaluate(result.trajectory, truth, "origin")
+        written.append(save_evaluation_plot(evaluation, out / f"{name}.png"))
+    written.append(out / "sample_fused.evaluation.txt")
+    written[-1].write_text(f"EKF (gpo-exact + tracking camera) on the sample recording\n{evaluation.table()}\n")
+    return written
 
 
 def print_run(result: OdometryResult) -> None:
@@ -178,6 +188,9 @@ def main(argv: list[str] | None = None) -> int:
     run_parser.add_argument("--method", choices=METHODS, help="motion estimator (default: the config's)")
     run_parser.add_argument("--vector", choices=VECTORS, help="motion vector statistic (default: the config's)")
     run_parser.add_argument("--topic", help="image topic (default: the config's, else the bag's only one)")
+    run_parser.add_argument("--write-bag", type=Path, help="a copy of the bag with the estimate on /gpo/odom")
+    table4_parser = commands.add_parser("table4", help="the first paper's Table 4 on the simulated 15-16 m paths")
+    table4_parser.add_argument("paths", nargs="*", metavar="PRESET", help="presets (default: long1 long2 long3)")
     evaluate_parser = commands.add_parser("evaluate", help="errors of a TUM trajectory against the ground truth")
     evaluate_parser.add_argument("estimate", type=Path, help="the estimated trajectory, a TUM file")
     evaluate_parser.add_argument("truth", type=Path, help="ground truth: a TUM file, or a bag with --gt-topic")
@@ -194,6 +207,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"wrote {len(written)} files to {args.out.resolve()}:")
             for path in written:
                 print(f"  {path}")
+            print(written[-1].read_text(), end="")
         elif args.command == "simulate":
             print(f"{args.preset}: {PRESETS[args.preset].description}")
             print(f"wrote {simulate(args.preset, args.out, args.format)}")
@@ -212,6 +226,8 @@ def main(argv: list[str] | None = None) -> int:
             print_run(result)
             for path in result.write(args.out):
                 print(f"wrote {path}")
+            if args.write_bag:
+                print(f"wrote {copy_with_trajectory(args.bag, args.write_bag, result.trajectory)} (/gpo/odom)")
             return 1 if result.error else 0
         elif args.command == "evaluate":
             evaluation = evaluate(
@@ -220,6 +236,9 @@ def main(argv: list[str] | None = None) -> int:
             print(evaluation)
             if args.plot:
                 print(f"wrote {save_evaluation_plot(evaluation, args.plot)}")
+        elif args.command == "table4":
+            table = reproduce_table4(tuple(args.paths or TABLE4_PATHS))
+            print(table.format(), table.format_table2(), sep="\n\n")
         elif args.command == "sample-data":
             for path in write_sample_data(args.out):
                 print(f"wrote {path}")

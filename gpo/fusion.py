@@ -158,7 +158,7 @@ class FusionSettings:
     reference / inliers (the median of n tracks scatters as 1 / sqrt(n)). The process noise is
     ``ProcessNoise(accel_mps2, angular_accel_radps2)``."""
 
-    floor_method: str = "gpo"
+    floor_method: str = "gpo-exact"
     tracking_topic: str = "/camera/odom/sample"
     tracking_frame: str = "camera_pose_frame"
     floor_speed_sigma_mps: float = 0.002

@@ -136,6 +136,15 @@ def test_plain_gpi_is_only_approximately_metric(ortho):
     assert 1.0 < np.nanmean(lower) < 5.0 and np.nanmax(lower) < 15.0
 
 
+def test_the_resampled_gpi_is_as_metric_as_the_gpi(ortho):
+    """Resampled onto the ortho-GPI's grid by its own placement, the plain GPI puts the floor where the analytic
+    route does to within the four corners' accuracy (this grid lies on the GPI's front-face part)."""
+    table = ortho.gpi.resampled(ortho.floor)
+    assert not table.floor.metric and table.floor.width == ortho.floor.width
+    difference = route_difference(table, analytic_table(RIG.camera, RIG.mount, table.floor))
+    assert difference.common_fraction == 1.0 and difference.mean_mm < 0.5 and difference.max_mm < 1.5
+
+
 def test_hand_picked_corners_give_nearly_the_same_gpi(ortho, calibration_frame):
     """Corners a fifth of a pixel off put the front face's floor within a millimetre of where the found ones do on
     the board, but the four-corner homography carries the error out to several millimetres at the GPI's far end:

@@ -10,8 +10,10 @@ from gpo.bag import BagWriter, Recording
 from gpo.kinematics import compose
 from gpo.metrics import final_error
 from gpo.pipeline import FloorOdometer, load_config, run, save_config, tracking_path
-from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+from gpo.sim.record import FLOOR_BOARDS, GROUND_TRUTH_TOPIC, recording
 from gpo.sim.rigs import t265_rig
+from gpo.sim.table4 import board_image_path, route_config
+from gpo.trajectory import Trajectory
 
 FRAMES = 60  # two seconds of the sample recording: straight ahead at up to 0.5 m/s
 
@@ -149,12 +151,43 @@ def test_config_round_trip_and_the_default(tmp_path):
         config.replace(method="magic")
 
 
-def test_cli_run_writes_trajectory_and_summary(sample, tmp_path, capsys):
+def test_cli_run_writes_trajectory_and_summary_and_a_bag_with_the_estimate(sample, tmp_path, capsys):
     path, _, _ = sample
-    assert main(["run", str(path), "--out", str(tmp_path / "t.tum"), "--method", "gpo-exact"]) == 0
+    out, copy = tmp_path / "t.tum", tmp_path / "with_estimate.bag"
+    arguments = ["run", str(path), "--out", str(out), "--method", "gpo-exact", "--write-bag", str(copy)]
+    assert main(arguments) == 0
     printed = capsys.readouterr().out
-    assert "frames/s" in printed and "distance travelled" in printed
+    assert "frames/s" in printed and "distance travelled" in printed and "/gpo/odom" in printed
     assert (tmp_path / "t.summary.yaml").exists()
+    written = Trajectory.read_tum(out)
+    with Recording(copy) as copied, Recording(path) as original:
+        estimate = copied.trajectory("/gpo/odom")
+        counts = {t.name: t.count for t in original.topics()}
+        assert {t.name: t.count for t in copied.topics() if t.name != "/gpo/odom"} == counts
+    np.testing.assert_array_equal(estimate.stamps_ns, written.stamps_ns)
+    np.testing.assert_allclose(estimate.positions, written.positions, atol=1e-9)
+
+
+@pytest.mark.parametrize(("route", "bound"), [("ortho-gpi", 0.002), ("gpi", 0.003)])
+def test_the_chessboard_routes_follow_the_sample(sample, route, bound):
+    path, _, truth = sample
+    result = run(path, route_config("gpo-exact", route), progress=False)
+    position, heading, distance = _final_error(result.trajectory, truth)
+    assert result.config.route == route
+    assert position / distance < bound and abs(np.degrees(heading)) < 1.0
+
+
+def test_a_chessboard_route_needs_a_readable_board_image(tmp_path):
+    config = load_config()
+    with pytest.raises(ValueError, match="unknown route"):
+        config.replace(route="magic")
+    with pytest.raises(ValueError, match="needs board_image"):
+        config.replace(route="gpi")
+    missing = config.replace(route="gpi", board_image=tmp_path / "none.png", board=FLOOR_BOARDS["t265"])
+    with pytest.raises(ValueError, match=r"none\.png"):
+        FloorOdometer(missing)
+    again = load_config(save_config(tmp_path / "rig.yaml", route_config("gpo", "ortho-gpi")))
+    assert (again.route, again.board, again.board_image) == ("ortho-gpi", FLOOR_BOARDS["t265"], board_image_path())
 
 
 def test_fused_runs_the_floor_odometry_and_the_tracking_camera_through_the_ekf(sample, tmp_path):
