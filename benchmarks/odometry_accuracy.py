@@ -8,7 +8,7 @@ For every method ``gpo.pipeline.run`` with the shipped config gives a trajectory
 own odometry in the bag, turned into base_link); ``gpo.metrics.final_error`` compares it with the recording's
 ground truth (the estimate's first pose placed on the truth's). The targets: final position error at most 0.5 % of
 the distance for ``gpo``, 0.3 % for ``gpo-exact``, ``gpo-rigid`` and ``fused``; none for the camera.
-``--write`` keeps the numbers as JSON, which chapter 06 prints.
+``--write`` keeps the numbers as JSON (``benchmarks/results/odometry_accuracy.json``).
 """
 
 import argparse
