@@ -468,3 +468,51 @@ def draw_nees(
     ax.grid(True, alpha=0.3, which="both")
     ax.legend(fontsize="small")
     return ax
+
+
+def draw_evaluated_paths(evaluations: dict, ax=None, styles: dict | None = None) -> plt.Axes:
+    """Top view of evaluated estimates (label -> ``gpo.metrics.Evaluation``), each where its evaluation's alignment
+    put it, over the truth (a wide grey line: the associated truth with the most poses); the start, the truth's end
+    (a cross) and each estimate's end (a dot) marked."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 5))
+    styles = styles or {}
+    truth = max((evaluation.truth for evaluation in evaluations.values()), key=len)
+    ax.plot(*truth.positions[:, :2].T, color="k", lw=5, alpha=0.2, label="truth")
+    for label, evaluation in evaluations.items():
+        placed = evaluation.estimate.positions[:, :2]
+        (line,) = ax.plot(*placed.T, label=label, **{"lw": 1.2, **styles.get(label, {})})
+        ax.plot(*placed[-1], "o", color=line.get_color(), ms=4)
+    ax.plot(*truth.positions[0, :2], "go", label="start")
+    ax.plot(*truth.positions[-1, :2], "kx", ms=9, mew=2, label="end (truth)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return ax
+
+
+def draw_evaluation_errors(evaluations: dict, ax=None, styles: dict | None = None, kind: str = "position") -> plt.Axes:
+    """Each evaluation's error (label -> ``gpo.metrics.Evaluation``) against the distance the truth travelled from its
+    first associated pose, metres: ``kind`` "position" (evo's APE of each pose, millimetres) or "heading" (the
+    estimate's yaw minus the truth's, degrees)."""
+    errors = {
+        "position": (lambda evaluation: 1e3 * evaluation.position_errors_m, "position error [mm]"),
+        "heading": (lambda evaluation: np.degrees(evaluation.heading_errors_rad), "heading error [deg]"),
+    }
+    if kind not in errors:
+        raise ValueError(f"unknown kind {kind!r}: expected {' or '.join(errors)}")
+    values, ylabel = errors[kind]
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 4))
+    styles = styles or {}
+    for label, evaluation in evaluations.items():
+        ax.plot(evaluation.distances_m, values(evaluation), label=label, **{"lw": 1.2, **styles.get(label, {})})
+    if kind == "heading":
+        ax.axhline(0.0, color="k", lw=0.8)
+    ax.set_xlabel("distance travelled by the truth [m]")
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return ax

@@ -1,0 +1,129 @@
+"""gpo.sim.table4 against numbers computed here: the table's final errors are those of the tracking camera, a fresh
+floor run and its EKF (and, for the floor run, those of a hand-made association and first-pose placement); its text
+names every row and path; a kept floor run is what a fresh run computes; and each config is kept in its own file.
+On the sample recording, so that it runs in seconds."""
+
+import numpy as np
+import pytest
+
+from gpo.bag import Recording
+from gpo.fusion import fuse
+from gpo.metrics import MAX_STAMP_DIFFERENCE_S, final_error
+from gpo.pipeline import load_config, tracking_path
+from gpo.sim import table4
+from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+from gpo.sim.table4 import ROWS, Row, floor_run, reproduce_table4, route_config
+
+CAMERA, FLOOR, FUSED = Row("camera"), Row("floor", "gpo-exact", "analytic"), Row("fused", "gpo-exact", "analytic")
+
+
+@pytest.fixture(scope="module")
+def sample():
+    """(bag, truth, the tracking camera's base_link path) of the sample recording."""
+    bag = recording("sample", progress=False)
+    with Recording(bag) as recorded:
+        return bag, recorded.trajectory(GROUND_TRUTH_TOPIC), tracking_path(recorded, load_config().fusion)
+
+
+@pytest.fixture(scope="module")
+def table(sample):
+    return reproduce_table4(paths=("sample",), rows=(CAMERA, FLOOR, FUSED))
+
+
+@pytest.fixture
+def empty_cache(tmp_path, monkeypatch):
+    """Floor runs kept in an empty folder (the recordings stay in theirs)."""
+    monkeypatch.setattr(table4, "cache_dir", lambda: tmp_path)
+    return tmp_path
+
+
+def _kept_files(folder):
+    return sorted(path.name for path in folder.rglob("*.npz"))
+
+
+def test_each_row_holds_the_final_error_of_the_run_made_here(sample, table):
+    bag, truth, tracking = sample
+    floor = floor_run(bag, route_config("gpo-exact", "analytic"), cache=False)  # computed now, not read back
+    fused = fuse(floor.trajectory, floor.inliers, tracking, load_config().fusion).trajectory
+    for row, estimate in ((CAMERA, tracking), (FLOOR, floor.trajectory), (FUSED, fused)):
+        expected, found = final_error(estimate, truth), table.evaluations[row]["sample"].final
+        assert found.position_m == pytest.approx(expected.position_m, abs=1e-9), row.label
+        assert found.heading_rad == pytest.approx(expected.heading_rad, abs=1e-9), row.label
+        assert found.distance_m == pytest.approx(expected.distance_m, abs=1e-12), row.label
+        assert found.poses == expected.poses, row.label
+    metres = table.translation_errors_m()
+    assert metres.shape == (3, 1)
+    assert metres[1, 0] == pytest.approx(final_error(floor.trajectory, truth).position_m, abs=1e-9)
+
+
+def test_the_floor_rows_final_error_by_hand(sample, table):
+    """Nearest truth stamp for each estimate stamp within 5 ms, the first pose placed on the truth's, the distance of
+    the last positions: the first paper's translation error without evo."""
+    bag, truth, _ = sample
+    estimate = floor_run(bag, route_config("gpo-exact", "analytic")).trajectory
+    nearest = np.abs(truth.times[None, :] - estimate.times[:, None]).argmin(axis=1)
+    close = np.abs(truth.times[nearest] - estimate.times) <= MAX_STAMP_DIFFERENCE_S
+    positions, yaw = estimate.positions[close], estimate.yaw[close]
+    true_positions, true_yaw = truth.positions[nearest[close]], truth.yaw[nearest[close]]
+    turn = true_yaw[0] - yaw[0]
+    rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    placed = (positions[:, :2] - positions[0, :2]) @ rotation.T + true_positions[0, :2]
+    distance = np.linalg.norm(np.diff(true_positions, axis=0), axis=1).sum()
+    final = table.evaluations[FLOOR]["sample"].final
+    assert final.poses == close.sum() > 400
+    assert final.position_m == pytest.approx(np.linalg.norm(placed[-1] - true_positions[-1, :2]), abs=1e-9)
+    assert final.distance_m == pytest.approx(distance, abs=1e-9)
+    assert final.percent == pytest.approx(100 * final.position_m / distance, abs=1e-9)
+    assert final.heading_rad == pytest.approx(np.angle(np.exp(1j * (yaw[-1] + turn - true_yaw[-1]))), abs=1e-9)
+
+
+def test_the_text_names_every_row_and_path_with_its_numbers(table):
+    text, averaged = table.format(), table.format_table2()
+    distance = table.evaluations[CAMERA]["sample"].final.distance_m
+    assert f"sample ({distance:.1f} m)" in text.splitlines()[0] and "mean" in text.splitlines()[0]
+    assert "mean over sample" in averaged.splitlines()[0]
+    lines = text.splitlines()[1:]
+    assert len(lines) == 3
+    for row, line, metres, share in zip(
+        table.rows, lines, table.translation_errors_m()[:, 0], table.percent()[:, 0], strict=True
+    ):
+        cell = f"{metres:>8.3f} ({share:5.2f} %)"
+        assert line == f"{row.label:<38}{cell}{cell}"  # one path: its mean is itself
+        assert any(line.startswith(row.label) for line in averaged.splitlines())
+    assert len({row.label for row in ROWS}) == len(ROWS)  # every row of the full table tells itself apart
+
+
+def test_a_kept_floor_run_is_what_a_fresh_run_computes(sample, empty_cache, monkeypatch):
+    bag = sample[0]
+    config = route_config("gpo-exact", "analytic")
+    fresh = floor_run(bag, config, cache=False)
+    assert _kept_files(empty_cache) == []  # cache=False keeps nothing
+    written = floor_run(bag, config)
+    assert len(_kept_files(empty_cache)) == 1
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("the kept run should have been read back, not computed")
+
+    monkeypatch.setattr(table4, "run", no_run)
+    read = floor_run(bag, config)
+    for kept in (written, read):
+        np.testing.assert_array_equal(kept.trajectory.stamps_ns, fresh.trajectory.stamps_ns)
+        np.testing.assert_allclose(kept.trajectory.positions, fresh.trajectory.positions, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(np.angle(np.exp(1j * (kept.trajectory.yaw - fresh.trajectory.yaw))), 0, atol=1e-12)
+        np.testing.assert_array_equal(kept.inliers, fresh.inliers)
+    assert read.frames_per_second == written.frames_per_second  # the run's own speed, kept with it
+    assert fresh.inliers.max() > 0 and fresh.inliers[0] == 0  # the first frame has no step
+
+
+def test_each_config_is_kept_in_its_own_file(sample, empty_cache):
+    bag = sample[0]
+    exact = route_config("gpo-exact", "analytic")
+    floor_run(bag, exact)
+    floor_run(bag, exact)
+    assert len(_kept_files(empty_cache)) == 1
+    floor_run(bag, route_config("gpo-rigid", "analytic"))
+    floor_run(bag, exact.replace(max_gap_s=0.25))  # the same method and route, another parameter
+    names = _kept_files(empty_cache)
+    assert len(names) == 3
+    assert sum("-gpo-exact-analytic-" in name for name in names) == 2
+    assert sum("-gpo-rigid-analytic-" in name for name in names) == 1
