@@ -20,6 +20,7 @@ makes a new file.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import os
 from dataclasses import asdict, dataclass, field
@@ -37,6 +38,7 @@ from gpo.sim.motion import T265_DRIFT, MotionPlan, named_plan, tracking_odometry
 from gpo.sim.render import Disturbances, FloorRenderer
 from gpo.sim.rigs import RIGS
 from gpo.targets import Chessboard, FloorBoard
+from gpo.trajectory import Trajectory
 
 START_NS = 1_700_000_000 * 1_000_000_000  # 2023-11-14 22:13:20 UTC: the first stamp of every recording
 GROUND_TRUTH_TOPIC = "/mocap/base_link"
@@ -227,6 +229,14 @@ def floor_board_image(rig_name: str, seed: int = 0) -> np.ndarray:
     return FloorRenderer(rig, floor).render(np.zeros(3), frame_seed=seed, boards=(FLOOR_BOARDS[rig_name],))
 
 
+def _rounded(trajectory: Trajectory) -> Trajectory:
+    """``trajectory`` to the nanometre and 1e-12 of a quaternion, so that its file is the same on every machine
+    (vectorised maths may differ in the last bit from one CPU to another)."""
+    return dataclasses.replace(
+        trajectory, positions=np.round(trajectory.positions, 9), quaternions=np.round(trajectory.quaternions, 12)
+    )
+
+
 def write_sample_data(folder) -> list[Path]:
     """Write the small sample files kept in the repository's ``data/``; return their paths.
 
@@ -241,8 +251,8 @@ def write_sample_data(folder) -> list[Path]:
     plan = named_plan(chosen.path)
     rig = RIGS[chosen.rig]()
     written = [
-        plan.ground_truth(120.0, START_NS).write_tum(folder / "sample_groundtruth.tum"),
-        tracking_odometry(plan, rig.mount, 200.0, T265_DRIFT, chosen.seed, START_NS).write_tum(
+        _rounded(plan.ground_truth(120.0, START_NS)).write_tum(folder / "sample_groundtruth.tum"),
+        _rounded(tracking_odometry(plan, rig.mount, 200.0, T265_DRIFT, chosen.seed, START_NS)).write_tum(
             folder / "sample_tracking_odometry.tum"
         ),
     ]
