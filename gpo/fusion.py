@@ -5,11 +5,11 @@ and yaw rate omega (rad/s). Process model: v and omega stay constant over a step
 noise (``ProcessNoise``); the pose moves along the exact arc they describe (``gpo.kinematics.arc_increment``),
 and the covariance through the Jacobian of that motion.
 
-Every source is used **differentially**, like robot_localization's differential mode: a source's pose increment
-over its own interval dt (already turned into base_link: ``gpo.trajectory.base_from_sensor_odometry``) becomes a
-measurement of (v, omega) = (arc length / dt, turn / dt). Absolute poses that drift (a tracking camera's odometry)
-therefore never pull the filter's pose, only their motion counts, weighted by the covariance each measurement
-carries.
+Every source is used **differentially**, like robot_localization's differential mode: only a source's pose
+increments count (already turned into base_link: ``gpo.trajectory.base_from_sensor_odometry``), never its absolute
+pose, which drifts. An increment over [t0, t1] is a measurement of the filter's own motion between those times: the
+filter keeps a copy of its pose at t0 for each source (stochastic cloning, Roumeliotis and Burdick 2002), and the
+measurement is ``between(clone, pose)`` with the covariance the increment carries (``increment_covariance``).
 Measurements must come in time order; ``OdometryFusion.add`` refuses stale ones (earlier than the filter's time)
 and the caller decides what to skip.
 """
@@ -25,7 +25,6 @@ from gpo.kinematics import arc_increment, between
 from gpo.trajectory import Trajectory
 
 STATE = ("x", "y", "theta", "v", "omega")
-VELOCITIES = np.array([[0.0, 0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 0.0, 1.0]])  # H: a source measures (v, omega)
 MAX_NIS = 50.0  # an innovation this many sigmas squared away is refused as an outlier
 
 
@@ -38,8 +37,8 @@ class ProcessNoise:
     """White noise driving the constant-velocity model: ``accel_mps2`` (m/s^2 per sqrt(Hz)) on v and
     ``angular_accel_radps2`` (rad/s^2 per sqrt(Hz)) on omega."""
 
-    accel_mps2: float = 0.5
-    angular_accel_radps2: float = 1.0
+    accel_mps2: float = 0.1
+    angular_accel_radps2: float = 0.3
 
 
 def motion_jacobian(state: np.ndarray, dt: float) -> np.ndarray:
@@ -69,91 +68,150 @@ def process_covariance(state: np.ndarray, dt: float, noise: ProcessNoise) -> np.
     return gain @ density @ gain.T
 
 
-def velocity_measurement(increment, dt: float) -> np.ndarray:
-    """(v, omega) of a base_link increment (dx, dy, dtheta) over ``dt`` seconds, as the arc through it: the turn
-    over dt, and the arc length over dt, from the step's component along the chord an arc of that turn would have
-    (at half the turn: ``gpo.kinematics.arc_increment``). Exact for an arc; a step's sideways noise then leaves the
-    speed unbiased, where the step's length (always longer than its projection) would read it too fast."""
-    dx, dy, turn = (float(value) for value in increment)
-    half = 0.5 * turn
-    along = dx * np.cos(half) + dy * np.sin(half)
-    arc = along if abs(half) < 1e-9 else along * half / np.sin(half)
-    return np.array([arc / dt, turn / dt])
+def increment_covariance(speed_sigma_mps: float, turn_sigma_radps: float, dt: float) -> np.ndarray:
+    """R (3, 3) of a base_link increment (dx, dy, dtheta) over ``dt`` seconds whose mean velocity over the step
+    scatters by ``speed_sigma_mps`` along and across the robot and by ``turn_sigma_radps`` in yaw rate."""
+    return np.diag(np.square([speed_sigma_mps * dt, speed_sigma_mps * dt, turn_sigma_radps * dt]))
+
+
+def increment_jacobians(clone: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The derivatives (3, 3) of ``gpo.kinematics.between(clone, pose)`` with respect to ``clone`` and to ``pose``
+    (each x, y, theta)."""
+    cos, sin = np.cos(clone[2]), np.sin(clone[2])
+    dx, dy = pose[0] - clone[0], pose[1] - clone[1]
+    rotation = np.array([[cos, sin, 0.0], [-sin, cos, 0.0], [0.0, 0.0, 1.0]])
+    by_clone = -rotation
+    by_clone[0, 2], by_clone[1, 2] = -sin * dx + cos * dy, -cos * dx - sin * dy
+    return by_clone, rotation
 
 
 class OdometryFusion:
-    """The EKF of ``STATE`` over time (seconds). ``add(time_s, increment, dt_s, covariance)`` takes a source's base_link
-    increment over [time_s - dt_s, time_s] with the covariance (2, 2) of the (v, omega) it implies."""
+    """The EKF of ``STATE`` over time (seconds), with one cloned pose per source (stochastic cloning).
 
-    def __init__(self, start_s: float, noise: ProcessNoise = ProcessNoise(), pose=(0.0, 0.0, 0.0)):
+    Each source in ``sources`` keeps a copy of the pose at the end of its last step, correlated with the state as
+    the pose was; its next increment (dx, dy, dtheta over [time_s - dt_s, time_s], in base_link at the step's start)
+    is measured as ``between(clone, pose)``. Whatever the state's v and omega did inside the step, the pose is
+    corrected by the whole increment, so the path does not lag behind a source by part of its interval.
+    """
+
+    def __init__(
+        self, start_s: float, noise: ProcessNoise = ProcessNoise(), pose=(0.0, 0.0, 0.0), sources=("floor", "tracking")
+    ):
         self.noise = noise
         self.time_s = float(start_s)
-        self._filter = ExtendedKalmanFilter(dim_x=5, dim_z=2)
-        self._filter.x = np.array([*pose, 0.0, 0.0], dtype=float)
-        self._filter.P = np.diag([1e-12, 1e-12, 1e-12, 1.0, 1.0])  # the pose is the origin; the motion unknown
+        size = 5 + 3 * len(sources)
+        self._filter = ExtendedKalmanFilter(dim_x=size, dim_z=3)
+        self._filter.x = np.array([*pose, 0.0, 0.0, *np.tile(np.asarray(pose, dtype=float), len(sources))])
+        self._filter.P = np.zeros((size, size))
+        self._filter.P[3:5, 3:5] = np.eye(2)  # the pose is the given one, the motion unknown
+        self._clones = {name: (5 + 3 * k, self.time_s) for k, name in enumerate(sources)}
         self.refused = 0
 
     @property
     def state(self) -> np.ndarray:
         """The state (5,) at ``time_s``."""
-        return self._filter.x.copy()
+        return self._filter.x[:5].copy()
 
     @property
     def covariance(self) -> np.ndarray:
         """The state's covariance (5, 5)."""
-        return self._filter.P.copy()
+        return self._filter.P[:5, :5].copy()
 
     def predict(self, time_s: float) -> None:
-        """Move the state to ``time_s`` (not before the filter's time) with the constant-velocity model."""
+        """Move the state to ``time_s`` (not before the filter's time) with the constant-velocity model; the
+        clones stay where they are."""
+        self._predict(time_s)
+        self._check()
+
+    def _predict(self, time_s: float) -> None:
         dt = time_s - self.time_s
         if dt < 0:
             raise ValueError(f"cannot predict back in time: {time_s:.6f} s is before the filter's {self.time_s:.6f} s")
         if dt == 0:
             return
-        ekf, state = self._filter, self._filter.x
-        ekf.F = motion_jacobian(state, dt)
-        ekf.Q = process_covariance(state, dt, self.noise)
+        ekf, state = self._filter, self._filter.x[:5]
+        motion = np.eye(len(ekf.x))
+        motion[:5, :5] = motion_jacobian(state, dt)
         step = arc_increment(state[3], state[4], dt)
         cos, sin = np.cos(state[2]), np.sin(state[2])
-        ekf.P = ekf.F @ ekf.P @ ekf.F.T + ekf.Q
-        ekf.x = state + np.array([cos * step[0] - sin * step[1], sin * step[0] + cos * step[1], step[2], 0.0, 0.0])
+        ekf.P = motion @ ekf.P @ motion.T
+        ekf.P[:5, :5] += process_covariance(state, dt, self.noise)
+        ekf.x[:5] = state + np.array([cos * step[0] - sin * step[1], sin * step[0] + cos * step[1], step[2], 0.0, 0.0])
         self.time_s = time_s
-        self._check()
 
-    def add(self, time_s: float, increment, dt_s: float, covariance) -> bool:
-        """Fuse one source's increment (dx, dy, dtheta) over the ``dt_s`` seconds ending at ``time_s``; returns
-        False when the measurement is refused as an outlier (its normalised innovation squared above ``MAX_NIS``).
-        Raises ValueError for a measurement before the filter's time or with non-finite numbers."""
-        increment = np.asarray(increment, dtype=float)
-        if not (np.isfinite(increment).all() and dt_s > 0):
-            raise ValueError(f"a measurement needs a finite increment and dt_s > 0, got {increment} over {dt_s}")
-        self.predict(time_s)
-        measured = velocity_measurement(increment, dt_s)
-        ekf = self._filter
-        innovation = measured - ekf.x[3:]
-        spread = VELOCITIES @ ekf.P @ VELOCITIES.T + covariance
+    def add(self, source: str, time_s: float, increment, dt_s: float, covariance) -> bool:
+        """Fuse ``source``'s base_link increment (dx, dy, dtheta) over the ``dt_s`` seconds ending at ``time_s``, with
+        its covariance (3, 3) (``increment_covariance``); ``increment=None`` for a step the source did not measure.
+        Returns True when fused; False when refused as an outlier (normalised innovation squared above
+        ``MAX_NIS``, counted in ``refused``), not measured, or not starting where the source's last step ended
+        (within 1 us): such a step only moves the source's clone to ``time_s``.
+        Raises ValueError for an unknown source, a step ending before the filter's time or non-finite numbers."""
+        if source not in self._clones:
+            raise ValueError(f"unknown source {source!r}; this filter fuses {', '.join(self._clones)}")
+        if not dt_s > 0:
+            raise ValueError(f"a step needs dt_s > 0, got {dt_s}")
+        if increment is not None and not np.isfinite(np.asarray(increment, dtype=float)).all():
+            raise ValueError(f"a measurement needs a finite increment, got {increment}")
+        self._predict(time_s)
+        index, since = self._clones[source]
+        fused = (
+            increment is not None and abs(time_s - dt_s - since) < 1e-6 and self._update(index, increment, covariance)
+        )
+        self._clone(source)
+        self._check()
+        return fused
+
+    def _update(self, index: int, increment, covariance) -> bool:
+        ekf, clone = self._filter, slice(index, index + 3)
+        measured, covariance = np.asarray(increment, dtype=float), np.asarray(covariance, dtype=float)
+
+        def jacobian(state):
+            by_clone, by_pose = increment_jacobians(state[clone], state[:3])
+            full = np.zeros((3, len(state)))
+            full[:, :3], full[:, clone] = by_pose, by_clone
+            return full
+
+        def expected(state):
+            return between(state[clone], state[:3])
+
+        def residual(a, b):
+            difference = np.subtract(a, b)
+            difference[2] = np.angle(np.exp(1j * difference[2]))
+            return difference
+
+        innovation, linear = residual(measured, expected(ekf.x)), jacobian(ekf.x)
+        spread = linear @ ekf.P @ linear.T + covariance
         if innovation @ np.linalg.solve(spread, innovation) > MAX_NIS:
             self.refused += 1
             return False
-        ekf.update(measured, lambda _: VELOCITIES, lambda state: state[3:], R=np.asarray(covariance, dtype=float))
-        self._check()
+        ekf.update(measured, jacobian, expected, R=covariance, residual=residual)
         return True
+
+    def _clone(self, source: str) -> None:
+        """Copy the pose, its covariance and its correlations into ``source``'s clone, stamped now."""
+        index, _ = self._clones[source]
+        ekf, clone = self._filter, slice(index, index + 3)
+        ekf.x[clone] = ekf.x[:3]
+        ekf.P[clone, :] = ekf.P[:3, :]
+        ekf.P[:, clone] = ekf.P[:, :3]
+        self._clones[source] = (index, self.time_s)
 
     def _check(self) -> None:
         covariance = self._filter.P
-        try:
-            np.linalg.cholesky(0.5 * (covariance + covariance.T) + 1e-12 * np.eye(5))
-        except np.linalg.LinAlgError:
-            raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer positive definite") from None
         if not np.isfinite(covariance).all():
             raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer finite")
+        try:
+            np.linalg.cholesky(0.5 * (covariance + covariance.T) + 1e-12 * np.eye(len(covariance)))
+        except np.linalg.LinAlgError:
+            raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer positive definite") from None
 
 
 @dataclass(frozen=True)
 class FusionSettings:
     """What ``--method fused`` fuses: the floor odometry of ``floor_method`` with a tracking camera's own odometry on
     ``tracking_topic`` (nav_msgs/Odometry of ``tracking_frame``, whose pose in base_link the bag's /tf_static holds).
-    Each source's increments are (v, omega) measurements with these standard deviations (m/s, rad/s); a floor frame
+    Each source's increment over dt has the covariance of a mean velocity that scatters by these standard
+    deviations (m/s along and across, rad/s; ``increment_covariance``); a floor frame
     whose flow kept fewer than ``floor_reference_inliers`` inlier tracks has its variance scaled up by
     reference / inliers (the median of n tracks scatters as 1 / sqrt(n)). The process noise is
     ``ProcessNoise(accel_mps2, angular_accel_radps2)``."""
@@ -166,8 +224,8 @@ class FusionSettings:
     tracking_speed_sigma_mps: float = 0.15
     tracking_turn_sigma_radps: float = 0.15
     floor_reference_inliers: int = 60
-    accel_mps2: float = 0.1
-    angular_accel_radps2: float = 0.3
+    accel_mps2: float = ProcessNoise.accel_mps2
+    angular_accel_radps2: float = ProcessNoise.angular_accel_radps2
 
 
 @dataclass(frozen=True)
@@ -186,33 +244,32 @@ def fuse(floor: Trajectory, inliers: np.ndarray, tracking: Trajectory, settings:
     ``floor``: the floor odometry's base_link poses; ``inliers`` (N,): the flow's inlier tracks behind the step into
     each pose, 0 where the step was not measured (coasted and held steps are not fused). ``tracking``: the tracking
     camera's odometry already turned into base_link poses (``gpo.trajectory.base_from_sensor_odometry``); only its
-    increments are used. Both may hold repeated or unordered stamps: steps that do not move forward in time are
-    left out, and the sources' steps are fused in time order.
+    increments are used. Each source's poses are taken in the order of their stamps, a repeated stamp once; the
+    sources' steps are fused in the order of their end times.
     """
     inliers = np.asarray(inliers, dtype=float)
     if inliers.shape != (len(floor),):
         raise ValueError(f"inliers must have one count per floor pose ({len(floor)}), got shape {inliers.shape}")
-    floor_covariance = np.diag([settings.floor_speed_sigma_mps, settings.floor_turn_sigma_radps]) ** 2
-    tracking_covariance = np.diag([settings.tracking_speed_sigma_mps, settings.tracking_turn_sigma_radps]) ** 2
-    measured = inliers[1:] > 0
-    floor_scale = np.maximum(1.0, settings.floor_reference_inliers / np.where(measured, inliers[1:], 1.0))
+    floor_sigmas = settings.floor_speed_sigma_mps, settings.floor_turn_sigma_radps
+    tracking_sigmas = settings.tracking_speed_sigma_mps, settings.tracking_turn_sigma_radps
+    floor_scale = settings.floor_reference_inliers / np.maximum(inliers, 1.0)
     events = [
-        *_increments(floor, floor_covariance * floor_scale[:, None, None], measured),
-        *_increments(tracking, np.broadcast_to(tracking_covariance, (max(len(tracking) - 1, 0), 2, 2)), None),
+        *_steps("floor", floor, floor_sigmas, np.maximum(1.0, floor_scale), inliers > 0),
+        *_steps("tracking", tracking, tracking_sigmas, np.ones(len(tracking)), np.ones(len(tracking), dtype=bool)),
     ]
-    events.sort(key=lambda event: event[0])
+    events.sort(key=lambda event: event[1])
     start = floor.times[0]
     fusion = OdometryFusion(start, ProcessNoise(settings.accel_mps2, settings.angular_accel_radps2))
     wanted = iter(floor.times[1:])
     poses, covariances, next_time = [fusion.state[:3]], [fusion.covariance], next(wanted, None)
-    for time_s, increment, dt, covariance in events:
+    for source, time_s, increment, dt, covariance in events:
         while next_time is not None and next_time < time_s:
             fusion.predict(max(next_time, fusion.time_s))
             poses.append(fusion.state[:3])
             covariances.append(fusion.covariance)
             next_time = next(wanted, None)
         if time_s > start:
-            fusion.add(time_s, increment, dt, covariance)
+            fusion.add(source, time_s, increment, dt, covariance)
     while next_time is not None:
         fusion.predict(max(next_time, fusion.time_s))
         poses.append(fusion.state[:3])
@@ -223,14 +280,22 @@ def fuse(floor: Trajectory, inliers: np.ndarray, tracking: Trajectory, settings:
     return FusedPath(trajectory, np.array(covariances), fusion.refused)
 
 
-def _increments(trajectory: Trajectory, covariances: np.ndarray, use: np.ndarray | None):
-    """(end time s, base_link increment, dt s, covariance) of each step of ``trajectory`` that moves forward in time
-    and where ``use`` (None: everywhere) is True; ``covariances`` (N - 1, 2, 2), one per step."""
-    planar = np.column_stack([trajectory.positions[:, :2], np.unwrap(trajectory.yaw)])
-    steps = between(planar[:-1], planar[1:])
-    times = trajectory.times
-    forward = np.diff(times) > 0
+def _steps(source: str, path: Trajectory, sigmas, variance_scale: np.ndarray, measured: np.ndarray):
+    """(source, end time s, base_link increment or None where not ``measured``, dt s, covariance (3, 3)) of each
+    step between consecutive distinct stamps of ``path``, its poses taken in the order of their stamps.
+    ``variance_scale`` and ``measured`` (N,) belong to the step into each pose."""
+    times = np.asarray(path.times, dtype=float)
+    order = np.argsort(times, kind="stable")
+    order = order[np.r_[True, np.diff(times[order]) > 0]]  # a repeated stamp once, its first message
+    planar = np.column_stack([path.positions[:, :2], path.yaw])[order]
+    increments, times = between(planar[:-1], planar[1:]), times[order]
     return [
-        (times[k + 1], steps[k], times[k + 1] - times[k], covariances[k])
-        for k in np.flatnonzero(forward if use is None else use & forward)
+        (
+            source,
+            times[k + 1],
+            increments[k] if measured[order[k + 1]] else None,
+            times[k + 1] - times[k],
+            increment_covariance(*sigmas, times[k + 1] - times[k]) * variance_scale[order[k + 1]],
+        )
+        for k in range(len(order) - 1)
     ]
