@@ -9,7 +9,9 @@ Every source is used **differentially**, like robot_localization's differential 
 increments count (already turned into base_link: ``gpo.trajectory.base_from_sensor_odometry``), never its absolute
 pose, which drifts. An increment over [t0, t1] is a measurement of the filter's own motion between those times: the
 filter keeps a copy of its pose at t0 for each source (stochastic cloning, Roumeliotis and Burdick 2002), and the
-measurement is ``between(clone, pose)`` with the covariance the increment carries (``increment_covariance``).
+measurement is the forward part and the turn of ``between(clone, pose)`` (``MEASURED``), with the covariance the
+increment carries (``increment_covariance``). base_link does not slide sideways, so a source's sideways steps are
+its own error and are not fused.
 Measurements must come in time order; ``OdometryFusion.add`` refuses stale ones (earlier than the filter's time)
 and the caller decides what to skip.
 """
@@ -25,6 +27,7 @@ from gpo.kinematics import arc_increment, between
 from gpo.trajectory import Trajectory
 
 STATE = ("x", "y", "theta", "v", "omega")
+MEASURED = [0, 2]  # of a base_link increment (dx, dy, dtheta): base_link does not slide sideways, dy is not fused
 MAX_NIS = 50.0  # an innovation this many sigmas squared away is refused as an outlier
 
 
@@ -69,9 +72,9 @@ def process_covariance(state: np.ndarray, dt: float, noise: ProcessNoise) -> np.
 
 
 def increment_covariance(speed_sigma_mps: float, turn_sigma_radps: float, dt: float) -> np.ndarray:
-    """R (3, 3) of a base_link increment (dx, dy, dtheta) over ``dt`` seconds whose mean velocity over the step
-    scatters by ``speed_sigma_mps`` along and across the robot and by ``turn_sigma_radps`` in yaw rate."""
-    return np.diag(np.square([speed_sigma_mps * dt, speed_sigma_mps * dt, turn_sigma_radps * dt]))
+    """R (2, 2) of the measured part (dx, dtheta) of a base_link increment over ``dt`` seconds whose mean forward
+    speed scatters by ``speed_sigma_mps`` and whose mean yaw rate by ``turn_sigma_radps``."""
+    return np.diag(np.square([speed_sigma_mps * dt, turn_sigma_radps * dt]))
 
 
 def increment_jacobians(clone: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -89,9 +92,10 @@ class OdometryFusion:
     """The EKF of ``STATE`` over time (seconds), with one cloned pose per source (stochastic cloning).
 
     Each source in ``sources`` keeps a copy of the pose at the end of its last step, correlated with the state as
-    the pose was; its next increment (dx, dy, dtheta over [time_s - dt_s, time_s], in base_link at the step's start)
-    is measured as ``between(clone, pose)``. Whatever the state's v and omega did inside the step, the pose is
-    corrected by the whole increment, so the path does not lag behind a source by part of its interval.
+    the pose was; of its next increment (dx, dy, dtheta over [time_s - dt_s, time_s], in base_link at the step's
+    start), dx and dtheta are measured as those of ``between(clone, pose)``. Whatever the state's v and omega did
+    inside the step, the pose is corrected by the whole increment, so the path does not lag behind a source by part
+    of its interval.
     """
 
     def __init__(
@@ -100,7 +104,7 @@ class OdometryFusion:
         self.noise = noise
         self.time_s = float(start_s)
         size = 5 + 3 * len(sources)
-        self._filter = ExtendedKalmanFilter(dim_x=size, dim_z=3)
+        self._filter = ExtendedKalmanFilter(dim_x=size, dim_z=len(MEASURED))
         self._filter.x = np.array([*pose, 0.0, 0.0, *np.tile(np.asarray(pose, dtype=float), len(sources))])
         self._filter.P = np.zeros((size, size))
         self._filter.P[3:5, 3:5] = np.eye(2)  # the pose is the given one, the motion unknown
@@ -141,10 +145,10 @@ class OdometryFusion:
 
     def add(self, source: str, time_s: float, increment, dt_s: float, covariance) -> bool:
         """Fuse ``source``'s base_link increment (dx, dy, dtheta) over the ``dt_s`` seconds ending at ``time_s``, with
-        its covariance (3, 3) (``increment_covariance``); ``increment=None`` for a step the source did not measure.
-        Returns True when fused; False when refused as an outlier (normalised innovation squared above
-        ``MAX_NIS``, counted in ``refused``), not measured, or not starting where the source's last step ended
-        (within 1 us): such a step only moves the source's clone to ``time_s``.
+        the covariance (2, 2) of its (dx, dtheta) (``increment_covariance``); ``increment=None`` for a step the
+        source did not measure. Returns True when fused; False when refused as an outlier (normalised innovation
+        squared above ``MAX_NIS``, counted in ``refused``), not measured, or not starting where the source's last
+        step ended (within 1 us): such a step only moves the source's clone to ``time_s``.
         Raises ValueError for an unknown source, a step ending before the filter's time or non-finite numbers."""
         if source not in self._clones:
             raise ValueError(f"unknown source {source!r}; this filter fuses {', '.join(self._clones)}")
@@ -163,20 +167,21 @@ class OdometryFusion:
 
     def _update(self, index: int, increment, covariance) -> bool:
         ekf, clone = self._filter, slice(index, index + 3)
-        measured, covariance = np.asarray(increment, dtype=float), np.asarray(covariance, dtype=float)
+        measured = np.asarray(increment, dtype=float)[MEASURED]
+        covariance = np.asarray(covariance, dtype=float)
 
         def jacobian(state):
             by_clone, by_pose = increment_jacobians(state[clone], state[:3])
-            full = np.zeros((3, len(state)))
-            full[:, :3], full[:, clone] = by_pose, by_clone
+            full = np.zeros((len(MEASURED), len(state)))
+            full[:, :3], full[:, clone] = by_pose[MEASURED], by_clone[MEASURED]
             return full
 
         def expected(state):
-            return between(state[clone], state[:3])
+            return between(state[clone], state[:3])[MEASURED]
 
         def residual(a, b):
             difference = np.subtract(a, b)
-            difference[2] = np.angle(np.exp(1j * difference[2]))
+            difference[1] = np.angle(np.exp(1j * difference[1]))
             return difference
 
         innovation, linear = residual(measured, expected(ekf.x)), jacobian(ekf.x)
@@ -281,7 +286,7 @@ def fuse(floor: Trajectory, inliers: np.ndarray, tracking: Trajectory, settings:
 
 
 def _steps(source: str, path: Trajectory, sigmas, variance_scale: np.ndarray, measured: np.ndarray):
-    """(source, end time s, base_link increment or None where not ``measured``, dt s, covariance (3, 3)) of each
+    """(source, end time s, base_link increment or None where not ``measured``, dt s, covariance (2, 2)) of each
     step between consecutive distinct stamps of ``path``, its poses taken in the order of their stamps.
     ``variance_scale`` and ``measured`` (N,) belong to the step into each pose."""
     times = np.asarray(path.times, dtype=float)

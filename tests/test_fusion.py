@@ -33,6 +33,13 @@ def test_increment_jacobians_match_finite_differences(poses):
         np.testing.assert_allclose(jacobian, numeric, atol=1e-5)
 
 
+def _noisy(increment, covariance, rng):
+    """``increment`` (dx, dy, dtheta) with white noise of ``covariance`` (2, 2) on its measured part (dx, dtheta)."""
+    noisy = np.array(increment, dtype=float)
+    noisy[[0, 2]] += rng.multivariate_normal(np.zeros(2), covariance)
+    return noisy
+
+
 def _drive(seconds=6.0, rate_hz=30.0, v=0.4, omega=0.3, sigma=(0.02, 0.02), seed=0):
     """A constant arc measured by one source whose increments carry white noise of ``increment_covariance(*sigma)``;
     the filter and the true final pose."""
@@ -41,8 +48,7 @@ def _drive(seconds=6.0, rate_hz=30.0, v=0.4, omega=0.3, sigma=(0.02, 0.02), seed
     fusion = OdometryFusion(0.0, ProcessNoise(), sources=("floor",))
     covariance = increment_covariance(*sigma, dt)
     for k in range(1, round(seconds * rate_hz) + 1):
-        measured = arc_increment(v, omega, dt) + rng.standard_normal(3) * np.sqrt(np.diag(covariance))
-        fusion.add("floor", k * dt, measured, dt, covariance)
+        fusion.add("floor", k * dt, _noisy(arc_increment(v, omega, dt), covariance, rng), dt, covariance)
     return fusion, arc_increment(v, omega, seconds)
 
 
@@ -80,6 +86,21 @@ def test_an_accelerating_robot_is_not_followed_late():
     assert abs(fusion.state[3] - acceleration * seconds) < 0.05
 
 
+def test_sideways_steps_are_not_fused():
+    """base_link does not slide sideways: a source's steps that do (a bicycle model's slip) move the fused path as
+    their forward part and turn alone do."""
+    covariance = increment_covariance(0.002, 0.03, 1 / 30)
+    paths = []
+    for slide in (0.0, 0.002):
+        fusion = OdometryFusion(0.0, sources=("floor",))
+        for k in range(1, 31):
+            fusion.add(
+                "floor", k / 30, arc_increment(0.4, 0.3, 1 / 30) + np.array([0.0, slide, 0.0]), 1 / 30, covariance
+            )
+        paths.append(fusion.state)
+    np.testing.assert_allclose(paths[1], paths[0], rtol=0, atol=1e-12)
+
+
 def test_two_sources_at_different_rates_beat_either():
     rng = np.random.default_rng(1)
     v, omega, seconds = 0.3, -0.2, 5.0
@@ -96,8 +117,7 @@ def test_two_sources_at_different_rates_beat_either():
         for time_s, name in events:
             rate, sigma = sources[name]
             covariance = increment_covariance(sigma, sigma, 1 / rate)
-            measured = arc_increment(v, omega, 1 / rate) + rng.standard_normal(3) * np.sqrt(np.diag(covariance))
-            fusion.add(name, time_s, measured, 1 / rate, covariance)
+            fusion.add(name, time_s, _noisy(arc_increment(v, omega, 1 / rate), covariance, rng), 1 / rate, covariance)
         fusion.predict(seconds)
         errors[used] = np.hypot(*(fusion.state[:2] - arc_increment(v, omega, seconds)[:2]))
     assert errors["floor", "camera"] < min(errors["floor",], errors["camera",]) * 1.2
