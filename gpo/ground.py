@@ -635,6 +635,28 @@ def analytic_points(
     return uv, valid
 
 
+def floor_points(
+    camera: EUCM | Pinhole, mount: CameraMount | tuple[float, float, float], uv
+) -> tuple[np.ndarray, np.ndarray]:
+    """The floor points (..., 2) of base_link, metres, seen at camera pixels ``uv`` (..., 2), and their validity.
+
+    The inverse of ``analytic_points`` for single points, and the second paper's keypoint correction (its §3.2):
+    ``camera.unproject`` removes the lens distortion, ``mount`` (the optical frame's pose in base_link, e.g. from
+    ``gpo.mount.estimate_mount`` on a chessboard lying on the floor) turns each ray so that the floor is level, and
+    the ray meets the floor z = 0 at the mount's height. Invalid where the pixel does not unproject or its ray does
+    not point down to the floor.
+    """
+    mount = _as_mount(mount)
+    rays, valid = camera.unproject(_as_points(uv))
+    down = mount.rotation.apply(rays.reshape(-1, 3)).reshape(rays.shape)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        reach = -mount.position[2] / down[..., 2]
+    valid &= np.isfinite(reach) & (reach > 0)
+    xy = mount.position[:2] + reach[..., None] * down[..., :2]
+    xy[~valid] = np.nan
+    return xy, valid
+
+
 def analytic_table(
     camera: EUCM | Pinhole,
     mount: CameraMount | tuple[float, float, float],

@@ -26,6 +26,7 @@ from gpo.ground import (
     analytic_points,
     analytic_table,
     chessboard_route,
+    floor_points,
     front_face_corners,
     ground_plane_image,
     ortho_rectify,
@@ -36,7 +37,7 @@ from gpo.rig import CameraMount
 from gpo.sim.floors import make_floor
 from gpo.sim.record import FLOOR_BOARDS, TEXEL_M, floor_board_image
 from gpo.sim.render import FloorRenderer, camera_pose_in_world
-from gpo.sim.rigs import t265_rig
+from gpo.sim.rigs import downward_rig, t265_rig
 from gpo.sim.table1 import reproduce_table1
 
 RIG = t265_rig()
@@ -384,3 +385,23 @@ def test_gpi_reaching_too_far_ahead(calibration_frame):
         ground_plane_image(calibration_frame, RIG.camera, BOARD, ahead_m=50.0, cache=False)
     allowed = float(str(error.value).split("ahead_m <= ")[1].split()[0])
     assert ground_plane_image(calibration_frame, RIG.camera, BOARD, ahead_m=allowed, cache=False).front_rows > 0
+
+
+@pytest.mark.parametrize("make_rig", [downward_rig, t265_rig])
+def test_floor_points_invert_the_analytic_projection(make_rig):
+    """Pixels of known floor points (``analytic_points``) come back to those points: undistortion, tilt and height."""
+    rig = make_rig()
+    x_range = (-0.10, 0.10) if rig.name == "downward" else (0.70, 0.90)
+    floor = FloorImage.top_view(x_range, (-0.10, 0.10), 2e-3)
+    pixels, seen = analytic_points(rig.camera, rig.mount, floor)
+    points, valid = floor_points(rig.camera, rig.mount, pixels[seen])
+    assert valid.all()
+    truth = floor.pixel_to_base(floor.pixel_centres())[seen]
+    np.testing.assert_allclose(points, truth, rtol=0, atol=1e-9)
+
+
+def test_floor_points_above_the_horizon_are_invalid():
+    rig = t265_rig()  # pitched 6 degrees down: the top of the fisheye sees the ceiling
+    points, valid = floor_points(rig.camera, rig.mount, [[424.0, 5.0], [424.0, 790.0]])
+    assert valid.tolist() == [False, True]
+    assert np.isnan(points[0]).all()
