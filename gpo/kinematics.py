@@ -241,6 +241,16 @@ def rigid_fit(source, target, weights=None) -> tuple[float, np.ndarray]:
     return angle, target_mean - rotation @ source_mean
 
 
+def seen_after(points_m, increment) -> np.ndarray:
+    """Where floor points seen at ``points_m`` (N, 2) in base_link are seen after the robot moves by ``increment``
+    (dx, dy, dtheta): T^-1 applied to them, the inverse of ``increment_from_point_pairs``."""
+    points_m = np.asarray(points_m, dtype=float)
+    dx, dy, turn = (float(v) for v in increment)
+    cos, sin = np.cos(turn), np.sin(turn)
+    shifted = points_m - [dx, dy]
+    return np.column_stack([cos * shifted[:, 0] + sin * shifted[:, 1], -sin * shifted[:, 0] + cos * shifted[:, 1]])
+
+
 def increment_from_point_pairs(start_m, end_m, weights=None) -> np.ndarray:
     """The increment (dx, dy, dtheta) of a frame in which floor points seen at ``start_m`` (N, 2) in base_link are
     seen at ``end_m`` (N, 2) at its end: the floor moved by the inverse of the robot's motion, end = T^-1 start."""

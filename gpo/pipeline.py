@@ -40,16 +40,22 @@ from scipy.spatial.transform import Rotation
 
 from gpo.bag import Recording, StampWarning
 from gpo.config import load_rig, rig_to_dict
+from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, degenerate, refit
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
 from gpo.fusion import FusionSettings, fuse
-from gpo.ground import FloorImage, RemapTable, analytic_table, ground_plane_image, ortho_rectify
-from gpo.kinematics import PaperBicycle, compose, increment_from_point_motion, increment_from_point_pairs
+from gpo.ground import FloorImage, RemapTable, analytic_table, floor_points, ground_plane_image, ortho_rectify
+from gpo.kinematics import (
+    PaperBicycle,
+    compose,
+    increment_from_point_motion,
+    increment_from_point_pairs,
+)
 from gpo.rig import Rig
 from gpo.targets import Chessboard, FloorBoard
 from gpo.trajectory import Trajectory, base_from_sensor_odometry
 
-FLOOR_METHODS = ("gpo", "gpo-exact", "gpo-rigid")
-ROUTES = ("analytic", "ortho-gpi", "gpi")
+FLOOR_METHODS = ("gpo", "gpo-exact", "gpo-rigid", "features")
+ROUTES = ("analytic", "ortho-gpi", "gpi", "keypoints")
 METHODS = (*FLOOR_METHODS, "fused")
 VECTORS = ("median", "mean")
 RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
@@ -70,7 +76,12 @@ class OdometryConfig:
     - ``analytic``: each floor point projected through the calibrated camera from the rig's mount (no chessboard);
     - ``ortho-gpi``: the first paper's chessboard route, fisheye -> cubemap -> GPI -> ortho-GPI, calibrated on
       ``board_image``, a frame of the chessboard ``board`` lying on the floor where ``board`` says;
-    - ``gpi``: the plain GPI of the same frame, its own approximate scale and place taken for true."""
+    - ``gpi``: the plain GPI of the same frame, its own approximate scale and place taken for true;
+    - ``keypoints``: no floor image; the ``features`` method detects keypoints in the camera image and turns each
+      into a floor point (``gpo.ground.floor_points``: undistortion, the mount's tilt, its height), the second
+      paper's way.
+
+    ``features``: the keypoint detector, matching and filters of the ``features`` method (``gpo.features``)."""
 
     rig: Rig
     floor: FloorImage
@@ -83,17 +94,23 @@ class OdometryConfig:
     route: str = "analytic"
     board_image: Path | None = None
     board: FloorBoard | None = None
+    features: FeatureParameters = field(default_factory=FeatureParameters)
 
     def __post_init__(self):
         if self.route not in ROUTES:
             raise ValueError(f"unknown route {self.route!r}; the routes are {', '.join(ROUTES)}")
-        if self.route != "analytic" and (self.board_image is None or self.board is None):
+        if self.route in ("ortho-gpi", "gpi") and (self.board_image is None or self.board is None):
             raise ValueError(f"the {self.route} route needs board_image (a frame of the floor board) and board")
         if self.method not in METHODS:
             raise ValueError(f"unknown method {self.method!r}; the methods are {', '.join(METHODS)}")
         if self.fusion.floor_method not in FLOOR_METHODS:
             floor_method = self.fusion.floor_method
             raise ValueError(f"fusion.floor_method must be one of {', '.join(FLOOR_METHODS)}, got {floor_method!r}")
+        floor_method = self.fusion.floor_method if self.method == "fused" else self.method
+        if self.route == "keypoints" and floor_method != "features":
+            raise ValueError(
+                f"the keypoints route corrects keypoints: it needs the features method, not {floor_method}"
+            )
         if self.vector not in VECTORS:
             raise ValueError(f"unknown vector {self.vector!r}; use {' or '.join(VECTORS)}")
         if not self.max_gap_s > 0:
@@ -127,8 +144,9 @@ def load_config(path=None) -> OdometryConfig:
         model = PaperBicycle(float(kinematics["wheelbase_m"]), float(kinematics["rear_to_reference_m"]))
     odometry = document.get("odometry", {})
     fusion = _dataclass_section(FusionSettings, document.get("fusion", {}), path, "fusion")
+    features = _dataclass_section(FeatureParameters, document.get("features", {}), path, "features")
     try:
-        return OdometryConfig(rig, floor, klt, model, **odometry, fusion=fusion, **route)
+        return OdometryConfig(rig, floor, klt, model, **odometry, fusion=fusion, **route, features=features)
     except TypeError as error:
         raise ValueError(f"{path}: odometry: {error}; its keys are method, vector, max_gap_s") from None
 
@@ -151,6 +169,7 @@ def config_to_dict(config: OdometryConfig) -> dict:
         },
         "odometry": {"method": config.method, "vector": config.vector, "max_gap_s": config.max_gap_s},
         "fusion": {f.name: getattr(config.fusion, f.name) for f in fields(config.fusion)},
+        "features": {f.name: getattr(config.features, f.name) for f in fields(config.features)},
     }
 
 
@@ -193,8 +212,8 @@ def _route(section: dict, path: Path) -> dict:
 
 
 def _route_to_dict(config: OdometryConfig) -> dict:
-    if config.route == "analytic":
-        return {}
+    if config.route in ("analytic", "keypoints"):
+        return {} if config.route == "analytic" else {"route": config.route}
     board = config.board
     return {
         "route": config.route,
@@ -212,9 +231,10 @@ def _route_to_dict(config: OdometryConfig) -> dict:
 
 def floor_table(config: OdometryConfig) -> RemapTable:
     """The one remap table from the camera to ``config.floor`` along ``config.route`` (up to half of the floor
-    image may lie outside the view; those pixels are masked)."""
+    image may lie outside the view; those pixels are masked); the ``keypoints`` route, which makes no floor image,
+    has the analytic one, for people to look at."""
     camera, floor = config.rig.camera, config.floor
-    if config.route == "analytic":
+    if config.route in ("analytic", "keypoints"):
         return analytic_table(camera, config.rig.mount, floor, max_outside=0.5)
     image = cv2.imread(str(config.board_image), cv2.IMREAD_GRAYSCALE)
     if image is None:
@@ -256,12 +276,18 @@ class FrameRecord:
 
 
 class FloorOdometer:
-    """Frame-by-frame odometry of one config: ``step(stamp_ns, image)`` returns that frame's ``FrameRecord``."""
+    """Frame-by-frame odometry of one config: ``step(stamp_ns, image)`` returns that frame's ``FrameRecord``.
+    The floor's motion comes from KLT flow (``gpo.flow``) or, for the ``features`` method, from matched keypoints
+    (``gpo.features``)."""
 
     def __init__(self, config: OdometryConfig):
         self.config = config
         self.table = floor_table(config)
-        self.flow = FloorFlow(config.klt, mask=self.table.valid)
+        if config.method == "features":
+            self.motion = FeatureTracker(config.features)
+            self._mask = None if config.route == "keypoints" else self.table.valid.astype(np.uint8)
+        else:
+            self.motion = FloorFlow(config.klt, mask=self.table.valid)
         affine = config.floor.affine
         self._to_metres = affine[:, :2].T.copy(), affine[:, 2].copy()
         self.pose = np.zeros(3)
@@ -271,7 +297,8 @@ class FloorOdometer:
 
     def floor_image(self, image: np.ndarray) -> np.ndarray:
         """The floor image (8-bit) of a grey frame (mono8, or mono16 taken to its upper 8 bits; ``Recording.frames``
-        with ``gray=True`` turns colour to grey); a clear error when its size is not the calibration's."""
+        with ``gray=True`` turns colour to grey); for the ``keypoints`` route the 8-bit frame itself. A clear error
+        when its size is not the calibration's."""
         width, height = self.table.source_size
         if image.shape[:2] != (height, width):
             raise ValueError(
@@ -280,7 +307,7 @@ class FloorOdometer:
             )
         if image.dtype == np.uint16:
             image = (image >> 8).astype(np.uint8)
-        return self.table.apply(image)
+        return image if self.config.route == "keypoints" else self.table.apply(image)
 
     def step(self, stamp_ns: int, image: np.ndarray) -> FrameRecord:
         """Take one camera frame (H, W) in stamp order; return its record."""
@@ -291,27 +318,33 @@ class FloorOdometer:
         floor = self.floor_image(image)
         self._stamp_ns = stamp_ns
         if previous is None:
-            self.flow.track(floor, stamp_ns * 1e-9)
+            self._track(floor, stamp_ns)
             self._measured_ns = stamp_ns
             return self._record(stamp_ns, None, "first")
         dt = (stamp_ns - previous) * 1e-9
         if dt > self.config.max_gap_s:
-            self.flow.restart()
-            self.flow.track(floor, stamp_ns * 1e-9)
+            self.motion.restart()
+            self._track(floor, stamp_ns)
             self._velocity[:] = 0.0
             return self._record(stamp_ns, None, "held", f"frame gap: {dt:.2f} s without frames, motion unknown")
-        measurement = self.flow.track(floor, stamp_ns * 1e-9)
-        if not measurement.quality.ok:
-            return self._coast(stamp_ns, dt, measurement, measurement.quality.flag)
-        increment = self._increment(measurement, dt)
+        measurement = self._track(floor, stamp_ns)
+        flag = measurement.flag if isinstance(measurement, FeatureMatches) else measurement.quality.flag
+        if flag is not None:
+            return self._coast(stamp_ns, dt, measurement, flag)
+        increment, why = self._increment(measurement, dt)
         if increment is None:
-            return self._coast(stamp_ns, dt, measurement, "rigid fit: too few tracks agree")
+            return self._coast(stamp_ns, dt, measurement, why)
         self.pose = compose(self.pose, increment)
         self._velocity = increment / dt
         self._measured_ns = stamp_ns
         return self._record(stamp_ns, measurement, "measured")
 
-    def _coast(self, stamp_ns: int, dt: float, measurement: FlowMeasurement, why: str) -> FrameRecord:
+    def _track(self, floor: np.ndarray, stamp_ns: int) -> FlowMeasurement | FeatureMatches | None:
+        if isinstance(self.motion, FeatureTracker):
+            return self.motion.track(floor, self._mask)
+        return self.motion.track(floor, stamp_ns * 1e-9)
+
+    def _coast(self, stamp_ns: int, dt: float, measurement, why: str) -> FrameRecord:
         if (stamp_ns - self._measured_ns) * 1e-9 <= self.config.max_gap_s:
             self.pose = compose(self.pose, self._velocity * dt)
             return self._record(stamp_ns, measurement, "coasted", why)
@@ -321,16 +354,20 @@ class FloorOdometer:
         matrix, offset = self._to_metres
         return uv @ matrix + offset
 
-    def _increment(self, measurement: FlowMeasurement, dt: float) -> np.ndarray | None:
+    def _increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
+        """The frame's increment, or None and why it cannot be had."""
         method = self.config.method
+        if method == "features":
+            return self._feature_increment(measurement)
         if method == "gpo-rigid":
-            return self._rigid_increment(measurement)
+            increment = self._rigid_increment(measurement)
+            return increment, None if increment is not None else "rigid fit: too few tracks agree"
         vector = measurement.median if self.config.vector == "median" else measurement.mean
         moved = self._to_metres[0].T @ vector  # floor displacement in base_link, metres
         where = self._metres(np.median(measurement.start, axis=0))  # the point whose motion the vector measures
         if method == "gpo":
-            return self._virtual_wheel_at(where[0]).step(np.zeros(3), -moved, dt)  # from the origin: the increment
-        return increment_from_point_motion(where, where + moved)
+            return self._virtual_wheel_at(where[0]).step(np.zeros(3), -moved, dt), None  # from the origin
+        return increment_from_point_motion(where, where + moved), None
 
     def _virtual_wheel_at(self, wheelbase_m: float) -> PaperBicycle:
         """The configured bicycle model with its virtual front wheel moved to ``wheelbase_m``, l_r in proportion."""
@@ -348,9 +385,43 @@ class FloorOdometer:
         chosen = inliers.ravel().astype(bool)
         return increment_from_point_pairs(start[chosen], end[chosen])
 
+    def _feature_increment(self, matches: FeatureMatches) -> tuple[np.ndarray | None, str | None]:
+        """The rigid 2-D transform of the kept matches in metres (the second paper's (theta, Tx, Ty)) as the robot's
+        increment, fitted again on every match it explains to ``refit_px``; None when the points are collinear."""
+        parameters = self.config.features
+        start, end = self._feature_metres(matches.start, matches.end)
+        if len(start) < parameters.min_matches or degenerate(matches.start):
+            return None, f"degenerate: {len(start)} kept matches on the floor, (nearly) on one line"
+        increment = increment_from_point_pairs(start, end)
+        if parameters.refit_px > 0:
+            start, end = self._feature_metres(*matches.matched)
+            tolerance = parameters.refit_px * self._feature_pixel_m
+            increment = refit(start, end, increment, tolerance, parameters.min_matches)
+        return increment, None
+
+    def _feature_metres(self, start_px: np.ndarray, end_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Matched pixels as floor points of base_link (metres), the pairs that do not reach the floor left out."""
+        if self.config.route != "keypoints":
+            return self._metres(start_px), self._metres(end_px)
+        camera, mount = self.config.rig.camera, self.config.rig.mount
+        (start, seen_start), (end, seen_end) = (floor_points(camera, mount, p) for p in (start_px, end_px))
+        return start[seen_start & seen_end], end[seen_start & seen_end]
+
+    @property
+    def _feature_pixel_m(self) -> float:
+        """About how far on the floor one pixel of the image the keypoints come from reaches, metres."""
+        if self.config.route != "keypoints":
+            return self.config.floor.metres_per_pixel
+        return self.config.rig.mount.height / self.config.rig.camera.fx
+
     def _record(self, stamp_ns, measurement, status, flag=None) -> FrameRecord:
-        quality = measurement.quality if measurement is not None else None
-        counts = (quality.tracked, quality.kept, quality.inliers, quality.spread_px) if quality else (0, 0, 0, math.nan)
+        if isinstance(measurement, FeatureMatches):
+            counts = (len(measurement.pairs), int(measurement.kept.sum()), int(measurement.kept.sum()), math.nan)
+        elif measurement is not None:
+            quality = measurement.quality
+            counts = (quality.tracked, quality.kept, quality.inliers, quality.spread_px)
+        else:
+            counts = (0, 0, 0, math.nan)
         return FrameRecord(int(stamp_ns), tuple(float(v) for v in self.pose), *counts, status, flag)
 
 

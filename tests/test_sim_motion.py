@@ -301,7 +301,8 @@ def test_yaw_drift_turns_about_the_floor_normal_only():
 
 # ----------------------------------------------------------------------------------------- named paths
 
-LENGTHS_M = {"sample": (3, 5), "test": (0.5, 1.5), "downward": (9, 11)}
+LENGTHS_M = {"sample": (3, 5), "test": (0.5, 1.5), "downward": (9, 11), "downward-short": (4, 5)}
+LENGTHS_M |= {"downward-long": (16, 17)}
 LENGTHS_M |= {f"short{i}": (2, 5) for i in (1, 2, 3)} | {f"long{i}": (12, 17) for i in (1, 2, 3)}
 
 

@@ -879,6 +879,32 @@ def path_downward() -> list[Segment]:
     ]
 
 
+def path_downward_short() -> list[Segment]:
+    """A short drive for the downward camera over each floor kind, 4.3 m: a straight, a left bend, a stop, a
+    reverse leg and a quarter turn on the spot."""
+    return [
+        Straight(1.5, 0.45),
+        Bend(np.pi / 2, 1.5, 0.35),
+        Straight(0.8, 0.45),
+        Stop(0.5),
+        Straight(-0.5, 0.3),
+        Spin(-np.pi / 2, 0.6),
+    ]
+
+
+def path_downward_long() -> list[Segment]:
+    """The second paper's longer test for its downward camera, 16.5 m at 0.35-0.5 m/s: a long straight, a left
+    bend, a lane change and a right bend, ending at rest."""
+    return [
+        Straight(4.0, 0.5),
+        Bend(np.pi / 2, 2.5, 0.35),
+        Straight(3.0, 0.5),
+        SCurve(3.0, 0.5, 0.4),
+        Bend(-np.pi / 2, 2.0, 0.35),
+        Straight(2.0, 0.5),
+    ]
+
+
 PATHS: dict[str, Callable[[], list[Segment]]] = {
     "sample": path_sample,
     "test": path_test,
@@ -889,6 +915,8 @@ PATHS: dict[str, Callable[[], list[Segment]]] = {
     "long2": path_long2,
     "long3": path_long3,
     "downward": path_downward,
+    "downward-short": path_downward_short,
+    "downward-long": path_downward_long,
 }
 
 

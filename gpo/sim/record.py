@@ -86,9 +86,12 @@ PRESETS = {
         for k in (1, 2, 3)
     },
     **{
-        f"downward-{kind}": Preset("downward", "downward", kind, 30 + k, f"the downward camera over a {kind} floor")
+        f"downward-{kind}": Preset(
+            "downward", "downward-short", kind, 30 + k, f"the downward camera over a {kind} floor, 4.3 m"
+        )
         for k, kind in enumerate(("wood", "raised", "industrial"))
     },
+    "downward-long": Preset("downward", "downward-long", "wood", 33, "the downward camera over a wood floor, 16.5 m"),
 }
 
 

@@ -1,0 +1,66 @@
+"""The floor feature odometer in the pipeline: the downward camera's keypoints corrected one by one (the second
+paper's way) or matched on the floor image, against the simulator's ground truth; the low-texture floor flagged."""
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gpo.bag import Recording
+from gpo.metrics import evaluate, final_error
+from gpo.pipeline import load_config, run, save_config
+from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+
+CONFIG = Path(__file__).resolve().parents[1] / "gpo" / "configs" / "sim_downward.yaml"
+
+
+@pytest.fixture(scope="module")
+def wood():
+    bag = recording("downward-wood", progress=False)
+    with Recording(bag) as recorded:
+        return bag, recorded.trajectory(GROUND_TRUTH_TOPIC)
+
+
+def test_keypoints_on_a_wood_floor_follow_the_truth(wood):
+    """4.3 m with a bend, a stop, a reverse leg and a quarter turn on the spot, every frame measured."""
+    bag, truth = wood
+    result = run(bag, load_config(CONFIG), progress=False)
+    assert all(record.status in ("first", "measured") for record in result.records)
+    error = final_error(result.trajectory, truth)
+    assert error.percent < 0.2
+    assert evaluate(result.trajectory, truth).heading_rmse_deg < 0.5
+
+
+def test_the_floor_image_route_follows_the_truth_too(wood):
+    bag, truth = wood
+    config = load_config(CONFIG)
+    on_floor_image = config.replace(route="analytic", features=dataclasses.replace(config.features, roi=None))
+    result = run(bag, on_floor_image, progress=False)
+    assert final_error(result.trajectory, truth).percent < 0.3
+
+
+def test_a_floor_without_keypoints_is_flagged_to_the_end():
+    bag = recording("downward-industrial", progress=False)
+    config = load_config(CONFIG)
+    result = run(bag, config, progress=False)
+    with Recording(bag) as recorded:
+        frames = {topic.name: topic.count for topic in recorded.topics()}[config.rig.image_topic]
+    assert len(result.records) == frames  # to the end
+    summary = result.summary()
+    assert summary["frames_measured"] == 0 and summary["frames_coasted"] + summary["frames_held"] > 0
+    assert set(summary["flags"]) == {"too few keypoints"}
+    assert np.isfinite(result.trajectory.positions).all()
+
+
+def test_features_config_round_trip_and_its_rules(tmp_path):
+    config = load_config(CONFIG)
+    assert config.method == "features" and config.route == "keypoints" and config.features.roi == (136, 80, 480, 320)
+    again = load_config(save_config(tmp_path / "downward.yaml", config))
+    assert again.features == config.features and again.route == "keypoints"
+    with pytest.raises(ValueError, match=r"keypoints route .* features method"):
+        config.replace(method="gpo-exact")
+    text = (tmp_path / "downward.yaml").read_text().replace("refit_px: 1.5", "refit_px: -1")
+    (tmp_path / "bad.yaml").write_text(text)
+    with pytest.raises(ValueError, match="features: refit_px"):
+        load_config(tmp_path / "bad.yaml")
