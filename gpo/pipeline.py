@@ -389,23 +389,23 @@ class FloorOdometer:
         """The rigid 2-D transform of the kept matches in metres (the second paper's (theta, Tx, Ty)) as the robot's
         increment, fitted again on every match it explains to ``refit_px``; None when the points are collinear."""
         parameters = self.config.features
-        start, end = self._feature_metres(matches.start, matches.end)
-        if len(start) < parameters.min_matches or degenerate(matches.start):
-            return None, f"degenerate: {len(start)} kept matches on the floor, (nearly) on one line"
-        increment = increment_from_point_pairs(start, end)
+        start, end, on_floor = self._feature_metres(*matches.matched)  # every match once, kept or not
+        kept = matches.kept & on_floor
+        if kept.sum() < parameters.min_matches or degenerate(matches.start):
+            return None, f"degenerate: {kept.sum()} kept matches on the floor, (nearly) on one line"
+        increment = increment_from_point_pairs(start[kept], end[kept])
         if parameters.refit_px > 0:
-            start, end = self._feature_metres(*matches.matched)
             tolerance = parameters.refit_px * self._feature_pixel_m
-            increment = refit(start, end, increment, tolerance, parameters.min_matches)
+            increment = refit(start[on_floor], end[on_floor], increment, tolerance, parameters.min_matches)
         return increment, None
 
-    def _feature_metres(self, start_px: np.ndarray, end_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Matched pixels as floor points of base_link (metres), the pairs that do not reach the floor left out."""
+    def _feature_metres(self, start_px: np.ndarray, end_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Matched pixels as floor points of base_link (metres), and which pairs reach the floor at both ends."""
         if self.config.route != "keypoints":
-            return self._metres(start_px), self._metres(end_px)
+            return self._metres(start_px), self._metres(end_px), np.ones(len(start_px), dtype=bool)
         camera, mount = self.config.rig.camera, self.config.rig.mount
         (start, seen_start), (end, seen_end) = (floor_points(camera, mount, p) for p in (start_px, end_px))
-        return start[seen_start & seen_end], end[seen_start & seen_end]
+        return start, end, seen_start & seen_end
 
     @property
     def _feature_pixel_m(self) -> float:
