@@ -72,6 +72,8 @@ class FeatureParameters:
     """The keypoints, matching and filters of the floor feature odometer.
 
     ``detector``: ``orb`` (fast) or ``sift`` (SURF's stand-in); ``max_features``: keypoints per frame, the strongest.
+    ``contrast_threshold``: SIFT's (OpenCV's ``contrastThreshold``; lower finds more keypoints on a smooth floor);
+    ``fast_threshold``: ORB's corner threshold, grey levels (OpenCV's ``fastThreshold``).
     ``scale``: the image is resized by this factor before detection (OpenCV's SIFT doubles its input first, so 0.5
     costs about a quarter); ``roi``: (u, v, width, height) of the part of the image searched, pixels (None: all),
     the paper reached 70 Hz with one. Keypoints are always given in the full image's pixels.
@@ -85,6 +87,8 @@ class FeatureParameters:
 
     detector: str = "orb"
     max_features: int = 500
+    contrast_threshold: float = 0.04
+    fast_threshold: int = 20
     scale: float = 1.0
     roi: tuple[int, int, int, int] | None = None
     ratio: float = 0.8
@@ -120,6 +124,8 @@ class FeatureParameters:
         return {
             "detector": (self.detector in DETECTORS, f"one of {', '.join(map(repr, DETECTORS))}"),
             "max_features": (_whole(self.max_features, 1), "a whole number >= 1"),
+            "contrast_threshold": (_real(self.contrast_threshold) and self.contrast_threshold > 0, "a number > 0"),
+            "fast_threshold": (_whole(self.fast_threshold, 1), "a whole number >= 1"),
             "scale": (_real(self.scale) and 0 < self.scale <= 1, "a number in (0, 1]"),
             "roi": (roi_ok, f"None or (u, v, width, height), whole pixels, width and height >= {MIN_ROI_PX}"),
             "ratio": (_real(self.ratio) and 0 < self.ratio <= 1, "a number in (0, 1] (1: no ratio test)"),
@@ -212,8 +218,8 @@ def _region(image, usable, roi) -> tuple[tuple[int, int], np.ndarray, np.ndarray
 
 def _detector(parameters: FeatureParameters):
     if parameters.detector == "orb":
-        return cv2.ORB_create(nfeatures=parameters.max_features)
-    return cv2.SIFT_create(nfeatures=parameters.max_features)
+        return cv2.ORB_create(nfeatures=parameters.max_features, fastThreshold=parameters.fast_threshold)
+    return cv2.SIFT_create(nfeatures=parameters.max_features, contrastThreshold=parameters.contrast_threshold)
 
 
 def _no_keypoints(detector: str) -> Keypoints:
@@ -488,8 +494,10 @@ class FeatureMatches:
 class FeatureTracker:
     """Matches each frame's keypoints with the previous frame's. ``track(image, mask)`` returns the pair's
     ``FeatureMatches`` (None for the first frame); each image is detected once, its keypoints serving as the next
-    frame's previous ones. ``restart()`` forgets the previous frame. The invariance check draws from one generator,
-    ``np.random.default_rng(parameters.seed)``, made here: the same frames give the same matches."""
+    frame's previous ones. ``follow(keypoints)`` does the same with keypoints already detected, so that settings
+    of the matching and the filters can be compared on one detection. ``restart()`` forgets the previous frame. The
+    invariance check draws from one generator, ``np.random.default_rng(parameters.seed)``, made here: the same
+    frames give the same matches."""
 
     def __init__(self, parameters: FeatureParameters | None = None):
         self.parameters = parameters if parameters is not None else FeatureParameters()
@@ -504,6 +512,10 @@ class FeatureTracker:
         """The matches from the previous frame to ``image`` (H, W) uint8, ``mask`` as for ``detect``."""
         seconds = {}
         current = _timed(seconds, "detect", detect, image, self.parameters, mask)
+        return self.follow(current, seconds)
+
+    def follow(self, current: Keypoints, seconds: dict | None = None) -> FeatureMatches | None:
+        """The matches from the previous frame's keypoints to ``current`` (None for the first frame)."""
         previous, self._previous = self._previous, current
         return None if previous is None else self.matches(previous, current, seconds)
 

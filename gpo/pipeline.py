@@ -40,7 +40,7 @@ from scipy.spatial.transform import Rotation
 
 from gpo.bag import Recording, StampWarning
 from gpo.config import load_rig, rig_to_dict
-from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, degenerate, refit
+from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, Keypoints, degenerate, detect, refit
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
 from gpo.fusion import FusionSettings, fuse
 from gpo.ground import FloorImage, RemapTable, analytic_table, floor_points, ground_plane_image, ortho_rectify
@@ -309,13 +309,21 @@ class FloorOdometer:
             image = (image >> 8).astype(np.uint8)
         return image if self.config.route == "keypoints" else self.table.apply(image)
 
-    def step(self, stamp_ns: int, image: np.ndarray) -> FrameRecord:
-        """Take one camera frame (H, W) in stamp order; return its record."""
+    def keypoints(self, image: np.ndarray) -> Keypoints:
+        """The keypoints of a camera frame as the ``features`` method detects them (in the frame itself for the
+        ``keypoints`` route, else in its floor image), to be given to ``step`` in the frame's place."""
+        if self.config.method != "features":
+            raise ValueError(f"keypoints are the features method's, this odometer's method is {self.config.method}")
+        return detect(self.floor_image(image), self.config.features, self._mask)
+
+    def step(self, stamp_ns: int, image: np.ndarray | Keypoints) -> FrameRecord:
+        """Take one camera frame (H, W) in stamp order, or for the ``features`` method its ``keypoints``; return
+        its record."""
         previous = self._stamp_ns
         if previous is not None and stamp_ns <= previous:
             problem = "repeats" if stamp_ns == previous else f"is {(previous - stamp_ns) * 1e-9:.3f} s before"
             return self._record(stamp_ns, None, "skipped", f"stamp out of order: {problem} the previous; skipped")
-        floor = self.floor_image(image)
+        floor = image if isinstance(image, Keypoints) else self.floor_image(image)
         self._stamp_ns = stamp_ns
         if previous is None:
             self._track(floor, stamp_ns)
@@ -339,9 +347,11 @@ class FloorOdometer:
         self._measured_ns = stamp_ns
         return self._record(stamp_ns, measurement, "measured")
 
-    def _track(self, floor: np.ndarray, stamp_ns: int) -> FlowMeasurement | FeatureMatches | None:
+    def _track(self, floor: np.ndarray | Keypoints, stamp_ns: int) -> FlowMeasurement | FeatureMatches | None:
         if isinstance(self.motion, FeatureTracker):
-            return self.motion.track(floor, self._mask)
+            return self.motion.follow(floor) if isinstance(floor, Keypoints) else self.motion.track(floor, self._mask)
+        if isinstance(floor, Keypoints):
+            raise ValueError(f"the {self.config.method} method needs camera frames, not keypoints")
         return self.motion.track(floor, stamp_ns * 1e-9)
 
     def _coast(self, stamp_ns: int, dt: float, measurement, why: str) -> FrameRecord:
@@ -493,26 +503,36 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
     else its only image topic). Returns what was computed even when reading stops early: then ``error`` says
     why (the error is not raised, so that the partial result can be written)."""
     config = config or load_config()
-    fused = config.method == "fused"
-    odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
-    records: list[FrameRecord] = []
     with Recording(bag) as recording, warnings.catch_warnings():
         warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
         topic = _choose_topic(recording, topic, config.rig)
         started = time.perf_counter()
-        error = None
-        try:
-            for frame in recording.frames(topic, gray=True, progress=progress):
-                records.append(odometer.step(frame.stamp_ns, frame.image))
-        except (ValueError, KeyError, OSError) as failure:
-            if not records:
-                raise
-            error = f"after {len(records)} frames: {failure}"
-        result = OdometryResult(records, time.perf_counter() - started, config, str(bag), topic, error)
-        if fused:
+        frames = ((frame.stamp_ns, frame.image) for frame in recording.frames(topic, gray=True, progress=progress))
+        result = odometry(frames, config, str(bag), topic)
+        if config.method == "fused":
             result.fused = fused_path(recording, result, config.fusion)
             result.seconds = time.perf_counter() - started
     return result
+
+
+def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str = "") -> OdometryResult:
+    """Floor odometry of ``frames``: (stamp_ns, image) pairs in stamp order, each image a grey camera frame or, for
+    the ``features`` method, its ``FloorOdometer.keypoints``, so that runs differing only in the matching and the
+    filters can share one detection. For ``fused`` the floor method's odometry (``run`` adds the filter). Stops at
+    the first frame that cannot be read (an error of reading ``frames``) and says why in ``error``."""
+    fused = config.method == "fused"
+    odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
+    records: list[FrameRecord] = []
+    started = time.perf_counter()
+    error = None
+    try:
+        for stamp_ns, image in frames:
+            records.append(odometer.step(stamp_ns, image))
+    except (ValueError, KeyError, OSError) as failure:
+        if not records:
+            raise
+        error = f"after {len(records)} frames: {failure}"
+    return OdometryResult(records, time.perf_counter() - started, config, source, topic, error)
 
 
 def tracking_path(recording: Recording, settings: FusionSettings) -> Trajectory:

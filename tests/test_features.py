@@ -326,6 +326,30 @@ def test_each_frame_is_detected_once_and_restart_forgets_the_previous():
     assert tracker.track(frames[0]) is None
 
 
+def test_follow_on_detected_keypoints_is_track_on_the_images():
+    image = _floor(8)
+    frames = [image, _moved(image, 1.0, (5.0, 2.0))[0], _moved(image, 2.0, (10.0, 4.0))[0]]
+    parameters = FeatureParameters(detector="orb")
+    tracked, followed = FeatureTracker(parameters), FeatureTracker(parameters)
+    for frame in frames:
+        by_image, by_keypoints = tracked.track(frame), followed.follow(detect(frame, parameters))
+    np.testing.assert_array_equal(by_image.pairs, by_keypoints.pairs)
+    np.testing.assert_array_equal(by_image.kept, by_keypoints.kept)  # the invariance check drew the same loops
+
+
+@pytest.mark.parametrize(
+    ("detector", "field", "lower"), [("sift", "contrast_threshold", 0.01), ("orb", "fast_threshold", 5)]
+)
+def test_a_lower_threshold_finds_keypoints_on_a_smooth_floor(detector, field, lower):
+    """A screed-like floor: grey 160 with +-3 grey levels of blurred grain, too faint for OpenCV's defaults."""
+    rng = np.random.default_rng(3)
+    grain = cv2.GaussianBlur(rng.normal(0.0, 1.0, SIZE[::-1]), (0, 0), 2.0)
+    smooth = np.clip(160 + 3 * grain / grain.std(), 0, 255).astype(np.uint8)
+    default = FeatureParameters(detector=detector)
+    assert len(detect(smooth, default)) < default.min_matches
+    assert len(detect(smooth, dataclasses.replace(default, **{field: lower}))) > 50
+
+
 def test_a_blank_frame_is_flagged_not_measured():
     tracker = FeatureTracker()
     blank = np.full(SIZE[::-1], 128, np.uint8)
@@ -369,6 +393,8 @@ def test_bad_images_are_refused_clearly():
     [
         ("detector", "surf"),
         ("max_features", 0),
+        ("contrast_threshold", 0.0),
+        ("fast_threshold", 0.5),
         ("scale", 0.0),
         ("roi", (0, 0, 10, 10)),
         ("ratio", 1.5),

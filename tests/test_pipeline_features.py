@@ -2,6 +2,7 @@
 paper's way) or matched on the floor image, against the simulator's ground truth; the low-texture floor flagged."""
 
 import dataclasses
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -9,7 +10,7 @@ import pytest
 
 from gpo.bag import Recording
 from gpo.metrics import evaluate, final_error
-from gpo.pipeline import load_config, run, save_config
+from gpo.pipeline import FloorOdometer, load_config, odometry, run, save_config
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
 CONFIG = Path(__file__).resolve().parents[1] / "gpo" / "configs" / "sim_downward.yaml"
@@ -38,6 +39,24 @@ def test_the_floor_image_route_follows_the_truth_too(wood):
     on_floor_image = config.replace(route="analytic", features=dataclasses.replace(config.features, roi=None))
     result = run(bag, on_floor_image, progress=False)
     assert final_error(result.trajectory, truth).percent < 0.3
+
+
+def test_keypoints_detected_beforehand_give_the_same_path(wood):
+    bag, _ = wood
+    config = load_config(CONFIG)
+    with Recording(bag) as recorded:
+        stream = itertools.islice(recorded.frames(gray=True, progress=False), 60)
+        frames = [(frame.stamp_ns, frame.image) for frame in stream]
+    odometer = FloorOdometer(config)
+    from_images = odometry(frames, config)
+    from_keypoints = odometry([(stamp, odometer.keypoints(image)) for stamp, image in frames], config)
+    assert [r.status for r in from_images.records] == [r.status for r in from_keypoints.records]
+    np.testing.assert_array_equal(from_images.trajectory.positions, from_keypoints.trajectory.positions)
+    flow = FloorOdometer(config.replace(method="gpo-exact", route="analytic"))
+    with pytest.raises(ValueError, match="gpo-exact method needs camera frames"):
+        flow.step(*frames[0][:1], odometer.keypoints(frames[0][1]))
+    with pytest.raises(ValueError, match="keypoints are the features method's"):
+        flow.keypoints(frames[0][1])
 
 
 def test_a_floor_without_keypoints_is_flagged_to_the_end():
