@@ -476,6 +476,15 @@ class FeatureMatches:
     seconds: dict
 
     @property
+    def histogram_kept(self) -> np.ndarray:
+        """Which matches (M,) the histogram filter kept (all when it did not run): the invariance check's input, in
+        whose order ``invariance.loops`` count."""
+        if self.histogram is None:
+            return np.ones(len(self.pairs), bool)
+        orientation, length = self.histogram
+        return (length if length is not None else orientation).kept
+
+    @property
     def start(self) -> np.ndarray:
         """The kept matches' points in the previous frame (K, 2), pixels."""
         return self.previous.points[self.pairs[self.kept, 0]]

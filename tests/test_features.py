@@ -358,6 +358,16 @@ def test_a_blank_frame_is_flagged_not_measured():
     assert matches.flag.startswith("too few keypoints") and not matches.kept.any() and len(matches.start) == 0
 
 
+def test_the_loops_count_the_matches_the_histogram_filter_kept():
+    image = _floor(9)
+    matches = _tracked(image, _moved(image, 2.0, (12.0, 3.0))[0], detector="orb", ratio=1.0)
+    assert matches.flag is None and 0 < matches.histogram_kept.sum() < len(matches.pairs)
+    checked = np.flatnonzero(matches.histogram_kept)  # what the invariance check was given
+    np.testing.assert_array_equal(checked[matches.invariance.kept], np.flatnonzero(matches.kept))
+    without = _tracked(image, _moved(image, 2.0, (12.0, 3.0))[0], detector="orb", histogram_filter=False)
+    assert without.histogram is None and without.histogram_kept.all()
+
+
 def test_the_same_seed_gives_the_same_kept_matches():
     image = _floor(9)
     moved = _moved(image, 2.0, (12.0, 3.0))[0]
