@@ -19,7 +19,8 @@ $(STAMP): environment.txt pyproject.toml
 
 test: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/python -m gpo recording sample short1 short2 short3 long1 long2 long3
+	$(BIN)/python -m gpo recording sample short1 short2 short3 long1 long2 long3 \
+		downward-wood downward-raised downward-industrial
 	$(BIN)/python -m gpo table4
 	$(BIN)/python -m pytest -p no:cacheprovider
 

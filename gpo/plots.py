@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.collections import LineCollection, PatchCollection, PolyCollection
+from matplotlib.patches import Circle
 from matplotlib.ticker import FuncFormatter
 from matplotlib.transforms import Affine2D
 
@@ -515,4 +517,107 @@ def draw_evaluation_errors(evaluations: dict, ax=None, styles: dict | None = Non
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
+    return ax
+
+
+def _frame(image, ax=None) -> plt.Axes:
+    """A grey 8-bit frame (H, W) on ``ax`` (a new figure when None), pixel centres at whole (u, v), no axes."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 4.5))
+    ax.imshow(image, cmap="gray", vmin=0, vmax=255)
+    ax.set_xlim(-0.5, image.shape[1] - 0.5)
+    ax.set_ylim(image.shape[0] - 0.5, -0.5)
+    ax.set_axis_off()
+    return ax
+
+
+def draw_keypoints(image, keypoints, ax=None) -> plt.Axes:
+    """A grey frame (H, W) with its keypoints (``gpo.features.Keypoints``, pixels of the full image), each a circle
+    of its diameter ``size``."""
+    ax = _frame(image, ax)
+    circles = [Circle(point, size / 2) for point, size in zip(keypoints.points, keypoints.sizes, strict=True)]
+    ax.add_collection(PatchCollection(circles, facecolor="none", edgecolor="yellow", lw=0.8))
+    ax.set_title(f"{len(keypoints)} keypoints")
+    return ax
+
+
+MATCH_FATES = {  # a match's fate -> its colour
+    "rejected by the histogram filter": "tab:red",
+    "rejected by the invariance check": "tab:orange",
+    "kept": "tab:green",
+    "not filtered: frame flagged": "tab:gray",
+}
+
+
+def match_fates(matches) -> dict[str, np.ndarray]:
+    """Which of the M matches of a ``gpo.features.FeatureMatches`` met each fate of ``MATCH_FATES`` (M,) bool. A
+    frame flagged before any stage ran keeps none: its matches are all "not filtered: frame flagged"."""
+    through_histogram = matches.histogram_kept
+    unfiltered = matches.flag is not None and matches.histogram is None and matches.invariance is None
+    return {
+        "rejected by the histogram filter": ~through_histogram,
+        "rejected by the invariance check": through_histogram & ~matches.kept,
+        "kept": matches.kept & (not unfiltered),
+        "not filtered: frame flagged": matches.kept & unfiltered,
+    }
+
+
+def draw_feature_matches(image, matches, ax=None) -> plt.Axes:
+    """The current grey frame (H, W) with every match of a ``gpo.features.FeatureMatches``: a line from its start
+    (previous frame) to its end (this frame), pixels of the full image, with a dot at the end, coloured by its fate
+    (``MATCH_FATES``, the flagged frame's only when it has some); the legend counts each fate."""
+    ax = _frame(image, ax)
+    start, end = matches.matched
+    fates = match_fates(matches)
+    for fate, chosen in fates.items():
+        if chosen.any() or fate != "not filtered: frame flagged":
+            segments = np.stack([start[chosen], end[chosen]], axis=1)
+            colour = MATCH_FATES[fate]
+            ax.add_collection(LineCollection(segments, colors=colour, lw=1, label=f"{chosen.sum()} {fate}"))
+            ax.plot(*end[chosen].T, ".", ms=3, color=colour)
+    ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
+    ax.set_title(f"{fates['kept'].sum()} of {len(matches.pairs)} matches kept")
+    return ax
+
+
+def draw_match_histogram(stage, ax=None, label: str = "orientation (deg)") -> plt.Axes:
+    """One histogram of the filter (a ``gpo.features.HistogramStage``) as bars over ``label``, the values' unit
+    (degrees for the orientation, pixels for the length), with lines at its mean mu and at mu +- sigma and that band
+    shaded; the filter keeps a band never narrower than the keypoints' localisation, so it may keep a little more.
+    An empty histogram (mean NaN) is drawn without the lines."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 3.5))
+    ax.stairs(stage.counts, stage.edges, fill=True, color="tab:blue")
+    if np.isfinite(stage.mean):
+        mean, sigma = stage.mean, stage.sigma
+        ax.axvspan(mean - sigma, mean + sigma, color="tab:green", alpha=0.15)
+        ax.axvline(mean, color="tab:green", lw=1.2, label=f"mu = {mean:.2f}")
+        ax.axvline(mean - sigma, color="tab:green", lw=0.8, ls="--", label=f"mu +- sigma, sigma = {sigma:.2f}")
+        ax.axvline(mean + sigma, color="tab:green", lw=0.8, ls="--")
+        ax.legend(loc="upper right", fontsize="small")
+    ax.set_xlabel(label)
+    ax.set_ylabel("matches")
+    ax.set_title(f"{int(stage.kept.sum())} of {len(stage.values)} kept")
+    return ax
+
+
+def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.Axes:
+    """The loops of the invariance check (the second paper's Algorithm 1, its Figs. 7-8) of a
+    ``gpo.features.FeatureMatches`` on the previous grey frame (H, W): each a closed polygon through its matches'
+    start points, pixels of the full image, kept loops green and rejected ones red, at most ``max_loops`` of each
+    (the first tried). When the check did not run, only the frame."""
+    ax = _frame(image, ax)
+    check = matches.invariance
+    if check is None:
+        ax.set_title("the invariance check did not run")
+        return ax
+    start = matches.matched[0][np.flatnonzero(matches.histogram_kept)]  # the check's input, which its loops index
+    loops = np.array(check.loops, dtype=int).reshape(-1, check.cardinality)
+    for kept, colour, name in ((True, "tab:green", "kept"), (False, "tab:red", "rejected")):
+        shown = loops[check.kept_loops == kept][:max_loops]
+        polygons = PolyCollection(start[shown], closed=True, facecolors="none", edgecolors=colour, lw=0.8)
+        polygons.set_label(f"{len(shown)} {name} loops shown")
+        ax.add_collection(polygons)
+    ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
+    ax.set_title(f"{int(check.kept_loops.sum())} of {len(loops)} loops kept, C = {check.cardinality}")
     return ax

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 
 import ipywidgets as widgets
 import matplotlib.pyplot as plt
@@ -13,6 +14,7 @@ from gpo.bag import Recording
 from gpo.calibrate import CalibrationError, calibrate_corners
 from gpo.camera import EUCM, T265_LIKE
 from gpo.cubemap import Cubemap, default_face_size
+from gpo.features import DETECTORS, FeatureParameters, FeatureTracker, detect
 from gpo.flow import FloorFlow, KLTParameters
 from gpo.fusion import FilterDiverged, FusionSettings, fuse
 from gpo.ground import (
@@ -35,10 +37,13 @@ from gpo.kinematics import (
 from gpo.metrics import final_error
 from gpo.mount import floor_angles
 from gpo.plots import (
+    draw_feature_matches,
     draw_floor_image,
     draw_flow_scatter,
     draw_flow_vectors,
     draw_heading_rate_ratio,
+    draw_invariance_loops,
+    draw_match_histogram,
     draw_paths_on_truth,
     draw_position_errors,
     draw_residuals,
@@ -594,3 +599,86 @@ def fusion_panel(floor, tracking, truth, settings: FusionSettings | None = None)
 
     sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
     return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+def feature_panel(previous_image, current_image, parameters: FeatureParameters | None = None) -> widgets.VBox:
+    """The second paper's floor feature odometer on one frame pair: the detector, the invariance check's threshold t
+    and cardinality C, the histograms' bins and Lowe's ratio test (1.0: off).
+
+    ``previous_image`` and ``current_image``: consecutive grey frames (H, W) uint8; ``parameters``: the
+    ``FeatureParameters`` the controls start from (default: SIFT) and the rest of the settings. Each detector's
+    keypoints are found once and kept, so that the other controls only match and filter again
+    (``FeatureTracker.matches``). Top: the matches on the current frame by fate, and the orientation histogram;
+    bottom: the length histogram, and the loops of the invariance check on the previous frame. One line reads out
+    the counts after each stage, the flag and each stage's time (detection's is that of the current frame, once).
+    """
+    base = parameters or FeatureParameters(detector="sift")
+    style = {"description_width": "initial"}
+    sizes = sorted({3, 4, 5, 6, base.cardinality} - {None})
+    controls = {
+        "detector": widgets.Dropdown(options=DETECTORS, value=base.detector, description="detector", style=style),
+        "invariance_threshold": _slider("t", base.invariance_threshold, 0.5, 1.0, 0.01),
+        "cardinality": widgets.Dropdown(
+            options=[("auto", None), *((str(size), size) for size in sizes)],
+            value=base.cardinality,
+            description="C",
+            style=style,
+        ),
+        "orientation_bins": widgets.IntSlider(
+            value=base.orientation_bins,
+            min=10,
+            max=360,
+            description="orientation bins",
+            continuous_update=False,
+            style=style,
+        ),
+        "length_bins": widgets.IntSlider(
+            value=base.length_bins, min=10, max=320, description="length bins", continuous_update=False, style=style
+        ),
+        "ratio": _slider("ratio test", base.ratio, 0.5, 1.0, 0.01),
+    }
+    found = {}  # detector -> the previous and current frames' keypoints and the current frame's detection seconds
+
+    def keypoints(detector: str):
+        if detector not in found:
+            chosen = dataclasses.replace(base, detector=detector)
+            previous = detect(previous_image, chosen)
+            started = time.perf_counter()
+            current = detect(current_image, chosen)
+            found[detector] = previous, current, time.perf_counter() - started
+        return found[detector]
+
+    def redraw(**values) -> None:
+        chosen = dataclasses.replace(base, **values)
+        previous, current, seconds = keypoints(chosen.detector)
+        matches = FeatureTracker(chosen).matches(previous, current, {"detect": seconds})
+        plt.close("all")
+        _, axes = plt.subplots(2, 2, figsize=(12, 8), gridspec_kw={"hspace": 0.3})
+        draw_feature_matches(current_image, matches, ax=axes[0, 0])
+        stages = matches.histogram or (None, None)
+        names = (("orientation", "deg"), ("length", "px"))
+        for ax, stage, (name, unit) in zip((axes[0, 1], axes[1, 0]), stages, names, strict=True):
+            if stage is None:
+                ax.set_title(f"no {name} histogram")
+                ax.set_axis_off()
+            else:
+                draw_match_histogram(stage, ax=ax, label=f"{name} ({unit})")
+        draw_invariance_loops(previous_image, matches, ax=axes[1, 1])
+        print(feature_matches_text(matches))
+        plt.show()
+
+    sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
+    return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+def feature_matches_text(matches) -> str:
+    """One line about a ``gpo.features.FeatureMatches``: the matches left after each stage that ran, the flag if
+    any, and each stage's wall time in milliseconds."""
+    counts = [f"{len(matches.pairs)} matches"]
+    if matches.histogram is not None:
+        counts.append(f"{int(matches.histogram_kept.sum())} after the histogram filter")
+    if matches.invariance is not None:
+        counts.append(f"{int(matches.kept.sum())} after the invariance check")
+    flag = f"; flagged: {matches.flag}" if matches.flag is not None else ""
+    times = ", ".join(f"{stage} {1e3 * seconds:.1f} ms" for stage, seconds in matches.seconds.items())
+    return f"{', '.join(counts)}{flag} ({times})"

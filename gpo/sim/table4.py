@@ -2,7 +2,8 @@
 
 Rows (``ROWS``): the tracking camera's own odometry; GPO (the paper's bicycle model on the median vector) on the
 plain GPI and on the ortho-rectified GPI; the EKF of GPO and the tracking camera on each; and beside the paper's
-method, the exact arc (``gpo-exact``) and the rigid fit (``gpo-rigid``) on both images and the EKF of the exact arc.
+method, the exact arc (``gpo-exact``) and the rigid fit (``gpo-rigid``) on both images and the EKF of the exact arc,
+and the second paper's floor feature odometer (``features``) on the ortho-GPI.
 Columns: the paths ``long1``-``long3`` (``PATHS``: a loop, S-curves with a U-turn, stop-and-go; 15.3-16.0 m) and
 their mean. The first paper's number is its "translation error": the final position error after placing the first
 pose on the truth (``gpo.metrics.translation_error``).
@@ -35,7 +36,9 @@ from gpo.trajectory import Trajectory
 PATHS = ("long1", "long2", "long3")
 ROUTE_NAMES = {"gpi": "GPI", "ortho-gpi": "ortho-GPI", "analytic": "analytic"}
 # the modules a floor run goes through: a change in any of them makes the kept runs stale
-RUN_MODULES = ("bag.py", "camera.py", "cubemap.py", "flow.py", "ground.py", "kinematics.py", "pipeline.py")
+RUN_MODULES = (
+    "bag.py", "camera.py", "cubemap.py", "features.py", "flow.py", "ground.py", "kinematics.py", "pipeline.py",
+)
 
 
 @dataclass(frozen=True)
@@ -51,7 +54,7 @@ class Row:
     def label(self) -> str:
         if self.source == "camera":
             return "tracking camera (T265)"
-        name = {"gpo": "GPO", "gpo-exact": "GPO-exact", "gpo-rigid": "GPO-rigid"}[self.method]
+        name = {"gpo": "GPO", "gpo-exact": "GPO-exact", "gpo-rigid": "GPO-rigid", "features": "features"}[self.method]
         name = f"EKF ({name} + T265)" if self.source == "fused" else name
         return f"{name}, {ROUTE_NAMES[self.route]}"
 
@@ -69,6 +72,7 @@ ROWS = (
     Row("fused", "gpo-exact", "ortho-gpi"),
     Row("floor", "gpo-exact", "analytic"),
     Row("floor", "gpo-rigid", "analytic"),
+    Row("floor", "features", "ortho-gpi"),
 )
 
 
