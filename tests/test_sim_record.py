@@ -2,6 +2,8 @@
 short presets' disturbances reach the floor patch the ortho-GPI shows."""
 
 import hashlib
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +16,7 @@ from gpo.sim.record import (
     ODOMETRY_TOPIC,
     PRESETS,
     START_NS,
+    fingerprint_sources,
     preset,
     recording,
     simulate,
@@ -120,3 +123,15 @@ def test_short_presets_drag_sheets_across_the_floor_patch_and_light_a_glint_in_i
 def test_only_the_short_presets_are_disturbed():
     disturbed = {name for name, chosen in PRESETS.items() if chosen.disturbances.sheets or chosen.disturbances.glints}
     assert disturbed == {"short1", "short2", "short3"}
+
+
+def test_the_cache_key_hashes_every_module_a_recording_runs():
+    """Every gpo module that importing the simulator loads is hashed, so no change to one reuses a stale bag;
+    the tables that only read recordings are not, so changing them re-renders nothing."""
+    program = (
+        "import sys, gpo.sim.record\n"
+        "print(*(m.__file__ for m in list(sys.modules.values()) if m.__name__.startswith('gpo.')))"
+    )
+    loaded = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=True).stdout.split()
+    modules = {Path(path).resolve() for path in loaded if not path.endswith("__init__.py")}
+    assert modules == {path.resolve() for path in fingerprint_sources()}

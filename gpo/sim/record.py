@@ -169,18 +169,22 @@ def cache_dir() -> Path:
     return Path(os.environ.get("GPO_CACHE_DIR") or pooch.os_cache("gpo") / "recordings")
 
 
-def _source_fingerprint() -> str:
-    """A hash of everything that shapes a recording: the simulator's, camera's and bag writer's sources."""
+def fingerprint_sources() -> list[Path]:
+    """The sources of the modules ``simulate`` runs, which the recording cache's key hashes.
+
+    Only those: the tables that read recordings (``table1``, ``table4``) change without re-rendering them.
+    """
     package = Path(__file__).resolve().parents[1]
-    sources = [
-        *sorted(package.glob("sim/*.py")),
-        package / "camera.py",
-        package / "rig.py",
-        package / "targets.py",
-        package / "bag.py",
+    return [
+        *(package / "sim" / f"{name}.py" for name in ("floors", "motion", "record", "render", "rigs")),
+        *(package / f"{name}.py" for name in ("bag", "camera", "rig", "targets", "trajectory")),
     ]
+
+
+def _source_fingerprint() -> str:
+    """A hash of everything that shapes a recording: the sources of ``fingerprint_sources()``."""
     digest = hashlib.sha256()
-    for source in sources:
+    for source in fingerprint_sources():
         digest.update(source.read_bytes())
     return digest.hexdigest()[:12]
 
