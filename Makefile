@@ -1,4 +1,5 @@
 # gpo: `make test` checks everything, `make demo` runs the main job into out/, `make lab` opens the notebooks.
+# `make book` builds the executed notebooks, without running them, into a static HTML site: out/book/index.html.
 # Each creates .venv from environment.txt first when it is missing or environment.txt has changed.
 
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
@@ -6,7 +7,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.environment.stamp
 
-.PHONY: test demo lab env clean
+.PHONY: test demo lab book env clean
 
 env: $(STAMP)
 
@@ -29,6 +30,9 @@ demo: $(STAMP)
 
 lab: $(STAMP)
 	$(BIN)/jupyter lab notebooks/
+
+book: $(STAMP)
+	$(BIN)/python docs/build_book.py --out out/book
 
 clean:
 	rm -rf $(VENV) out
