@@ -34,9 +34,11 @@ from gpo.kinematics import (
     integrate,
     paper_heading_rate_ratio,
 )
-from gpo.metrics import final_error
+from gpo.metrics import Alignment, evaluate, final_error
 from gpo.mount import floor_angles
 from gpo.plots import (
+    draw_evaluated_paths,
+    draw_evaluation_errors,
     draw_feature_matches,
     draw_floor_image,
     draw_flow_scatter,
@@ -618,9 +620,9 @@ def feature_panel(previous_image, current_image, parameters: FeatureParameters |
     controls = {
         "detector": widgets.Dropdown(options=DETECTORS, value=base.detector, description="detector", style=style),
         "invariance_threshold": _slider("t", base.invariance_threshold, 0.5, 1.0, 0.01),
-        "cardinality": widgets.Dropdown(
-            options=[("auto", None), *((str(size), size) for size in sizes)],
-            value=base.cardinality,
+        "cardinality": widgets.Dropdown(  # 0 stands for None, "auto": a Dropdown's None is no choice at all
+            options=[("auto", 0), *((str(size), size) for size in sizes)],
+            value=base.cardinality or 0,
             description="C",
             style=style,
         ),
@@ -649,7 +651,7 @@ def feature_panel(previous_image, current_image, parameters: FeatureParameters |
         return found[detector]
 
     def redraw(**values) -> None:
-        chosen = dataclasses.replace(base, **values)
+        chosen = dataclasses.replace(base, **(values | {"cardinality": values["cardinality"] or None}))
         previous, current, seconds = keypoints(chosen.detector)
         matches = FeatureTracker(chosen).matches(previous, current, {"detect": seconds})
         plt.close("all")
@@ -682,3 +684,56 @@ def feature_matches_text(matches) -> str:
     flag = f"; flagged: {matches.flag}" if matches.flag is not None else ""
     times = ", ".join(f"{stage} {1e3 * seconds:.1f} ms" for stage, seconds in matches.seconds.items())
     return f"{', '.join(counts)}{flag} ({times})"
+
+
+def evaluation_panel(table, shown: tuple | None = None) -> widgets.VBox:
+    """Every row of a Table 4 (``gpo.sim.table4.Table4``) on one path, under the alignment chosen.
+
+    ``table.evaluations[row][path]`` holds each row's estimate placed on the truth at its first pose; the panel
+    aligns it again (``gpo.metrics.evaluate``: ``origin``, ``se2``, ``se3`` or ``posyaw``; an alignment that moves
+    the whole path is the same from either start) and draws the paths over the truth and their position errors along
+    the distance travelled. ``shown``: the rows selected at first (default: the table's first three). One line a
+    row reads out its APE RMSE and maximum, final position error in mm and % of the distance, and heading RMSE.
+    """
+    labels = {row.label: row for row in table.rows}
+    style = {"description_width": "initial"}
+    controls = {
+        "path": widgets.Dropdown(options=table.paths, value=table.paths[0], description="path", style=style),
+        "alignment": widgets.Dropdown(
+            options=[mode.value for mode in Alignment if mode is not Alignment.NONE],
+            value=Alignment.ORIGIN.value,
+            description="alignment",
+            style=style,
+        ),
+        "chosen": widgets.SelectMultiple(
+            options=list(labels),
+            value=[row.label for row in (shown or table.rows[:3])],
+            rows=min(len(labels), 8),
+            description="rows",
+            layout={"width": "34em"},
+            style=style,
+        ),
+    }
+
+    def redraw(path: str, alignment: str, chosen: tuple[str, ...]) -> None:
+        plt.close("all")
+        if not chosen:
+            print("choose at least one row")
+            return
+        placed = {label: table.evaluations[labels[label]][path] for label in chosen}
+        evaluations = {label: evaluate(kept.estimate, kept.truth, alignment) for label, kept in placed.items()}
+        _, (left, right) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1, 1.2]})
+        draw_evaluated_paths(evaluations, ax=left)
+        left.set_title(f"{path}, aligned by {alignment}")
+        draw_evaluation_errors(evaluations, ax=right)
+        right.set_title("how far from the truth, along the way")
+        for label, evaluation in evaluations.items():
+            final = evaluation.final
+            print(
+                f"{label:<38} APE RMSE {1e3 * evaluation.ape_m.rmse:6.1f} mm, max {1e3 * evaluation.ape_m.max:6.1f} mm;"
+                f" final {1e3 * final.position_m:6.1f} mm ({final.percent:.2f} %); heading RMSE"
+                f" {evaluation.heading_rmse_deg:.2f} deg"
+            )
+        plt.show()
+
+    return widgets.VBox([widgets.HBox(list(controls.values())), widgets.interactive_output(redraw, controls)])

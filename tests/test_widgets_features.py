@@ -181,7 +181,7 @@ def test_panel_controls_start_from_the_parameters(frames):
     assert set(controls) == {"detector", "t", "C", "orientation bins", "length bins", "ratio test"}
     assert controls["detector"].options == ("orb", "sift")
     assert [label for label, _ in controls["C"].options] == ["auto", "3", "4", "5", "6"]
-    assert dict(controls["C"].options)["auto"] is None
+    assert dict(controls["C"].options)["auto"] == 0  # a Dropdown's None would show no choice
     values = {name: control.value for name, control in controls.items()}
     assert values == {
         "detector": "orb",
@@ -197,6 +197,17 @@ def test_panel_controls_start_from_the_parameters(frames):
     assert (controls["orientation bins"].min, controls["orientation bins"].max) == (10, 360)
     assert (controls["length bins"].min, controls["length bins"].max) == (10, 320)
     assert (controls["ratio test"].min, controls["ratio test"].max) == (0.5, 1.0)
+
+
+def test_automatic_cardinality_shows_as_auto_and_runs_as_none(frames):
+    controls = _controls(feature_panel(*frames))
+    automatic = _matches(frames, detector="sift").invariance.cardinality
+    assert controls["C"].label == "auto" and automatic != 3
+    assert plt.gcf().axes[3].get_title().endswith(f"C = {automatic}")
+    controls["C"].value = 3
+    assert plt.gcf().axes[3].get_title().endswith("C = 3")
+    controls["C"].value = 0
+    assert plt.gcf().axes[3].get_title().endswith(f"C = {automatic}")
 
 
 def test_panel_reads_out_each_stage_and_follows_the_controls(frames, capsys):
