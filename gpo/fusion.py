@@ -18,10 +18,12 @@ and the caller decides what to skip.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
+from scipy.linalg.lapack import dpotrf
 
 from gpo.kinematics import arc_increment, between
 from gpo.trajectory import Trajectory
@@ -47,10 +49,10 @@ class ProcessNoise:
 def motion_jacobian(state: np.ndarray, dt: float) -> np.ndarray:
     """F (5, 5): the derivative of the first-order motion x += v cos(theta) dt, y += v sin(theta) dt,
     theta += omega dt with respect to the state."""
-    theta, v = state[2], state[3]
+    v, cos, sin = state[3], math.cos(state[2]), math.sin(state[2])
     jacobian = np.eye(5)
-    jacobian[0, 2], jacobian[0, 3] = -v * np.sin(theta) * dt, np.cos(theta) * dt
-    jacobian[1, 2], jacobian[1, 3] = v * np.cos(theta) * dt, np.sin(theta) * dt
+    jacobian[0, 2], jacobian[0, 3] = -v * sin * dt, cos * dt
+    jacobian[1, 2], jacobian[1, 3] = v * cos * dt, sin * dt
     jacobian[2, 4] = dt
     return jacobian
 
@@ -60,15 +62,15 @@ def process_covariance(state: np.ndarray, dt: float, noise: ProcessNoise) -> np.
     theta = state[2]
     gain = np.array(
         [
-            [0.5 * dt**2 * np.cos(theta), 0.0],
-            [0.5 * dt**2 * np.sin(theta), 0.0],
+            [0.5 * dt**2 * math.cos(theta), 0.0],
+            [0.5 * dt**2 * math.sin(theta), 0.0],
             [0.0, 0.5 * dt**2],
             [dt, 0.0],
             [0.0, dt],
         ]
     )
-    density = np.diag([noise.accel_mps2**2, noise.angular_accel_radps2**2]) / dt
-    return gain @ density @ gain.T
+    density = np.array([noise.accel_mps2**2, noise.angular_accel_radps2**2]) / dt  # a diagonal matrix's diagonal
+    return (gain * density) @ gain.T
 
 
 def increment_covariance(speed_sigma_mps: float, turn_sigma_radps: float, dt: float) -> np.ndarray:
@@ -80,7 +82,7 @@ def increment_covariance(speed_sigma_mps: float, turn_sigma_radps: float, dt: fl
 def increment_jacobians(clone: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The derivatives (3, 3) of ``gpo.kinematics.between(clone, pose)`` with respect to ``clone`` and to ``pose``
     (each x, y, theta)."""
-    cos, sin = np.cos(clone[2]), np.sin(clone[2])
+    cos, sin = math.cos(clone[2]), math.sin(clone[2])
     dx, dy = pose[0] - clone[0], pose[1] - clone[1]
     rotation = np.array([[cos, sin, 0.0], [-sin, cos, 0.0], [0.0, 0.0, 1.0]])
     by_clone = -rotation
@@ -109,6 +111,7 @@ class OdometryFusion:
         self._filter.P = np.zeros((size, size))
         self._filter.P[3:5, 3:5] = np.eye(2)  # the pose is the given one, the motion unknown
         self._clones = {name: (5 + 3 * k, self.time_s) for k, name in enumerate(sources)}
+        self._jitter = 1e-12 * np.eye(size)  # added to the covariance before _check's Cholesky factorisation
         self.refused = 0
 
     @property
@@ -134,12 +137,13 @@ class OdometryFusion:
         if dt == 0:
             return
         ekf, state = self._filter, self._filter.x[:5]
-        motion = np.eye(len(ekf.x))
-        motion[:5, :5] = motion_jacobian(state, dt)
-        step = arc_increment(state[3], state[4], dt)
-        cos, sin = np.cos(state[2]), np.sin(state[2])
-        ekf.P = motion @ ekf.P @ motion.T
+        motion = motion_jacobian(state, dt)
+        # P = F P F' with F the identity outside the state's block (the clones stay): only its first rows and columns
+        ekf.P[:5] = motion @ ekf.P[:5]
+        ekf.P[:, :5] = ekf.P[:, :5] @ motion.T
         ekf.P[:5, :5] += process_covariance(state, dt, self.noise)
+        step = arc_increment(state[3], state[4], dt)
+        cos, sin = math.cos(state[2]), math.sin(state[2])
         ekf.x[:5] = state + np.array([cos * step[0] - sin * step[1], sin * step[0] + cos * step[1], step[2], 0.0, 0.0])
         self.time_s = time_s
 
@@ -169,27 +173,19 @@ class OdometryFusion:
         ekf, clone = self._filter, slice(index, index + 3)
         measured = np.asarray(increment, dtype=float)[MEASURED]
         covariance = np.asarray(covariance, dtype=float)
-
-        def jacobian(state):
-            by_clone, by_pose = increment_jacobians(state[clone], state[:3])
-            full = np.zeros((len(MEASURED), len(state)))
-            full[:, :3], full[:, clone] = by_pose[MEASURED], by_clone[MEASURED]
-            return full
-
-        def expected(state):
-            return between(state[clone], state[:3])[MEASURED]
-
-        def residual(a, b):
-            difference = np.subtract(a, b)
-            difference[1] = np.angle(np.exp(1j * difference[1]))
-            return difference
-
-        innovation, linear = residual(measured, expected(ekf.x)), jacobian(ekf.x)
+        # the expected measurement and its Jacobian at the state, once for the NIS gate and filterpy's update:
+        # between(clone, pose) is the difference turned into the clone's frame, by_pose that rotation
+        by_clone, by_pose = increment_jacobians(ekf.x[clone], ekf.x[:3])
+        expected = (by_pose @ (ekf.x[:3] - ekf.x[clone]))[MEASURED]
+        expected[1] = _wrap(expected[1])
+        linear = np.zeros((len(MEASURED), len(ekf.x)))
+        linear[:, :3], linear[:, clone] = by_pose[MEASURED], by_clone[MEASURED]
+        innovation = _residual(measured, expected)
         spread = linear @ ekf.P @ linear.T + covariance
-        if innovation @ np.linalg.solve(spread, innovation) > MAX_NIS:
+        if _nis(innovation, spread) > MAX_NIS:
             self.refused += 1
             return False
-        ekf.update(measured, jacobian, expected, R=covariance, residual=residual)
+        ekf.update(measured, lambda _: linear, lambda _: expected, R=covariance, residual=_residual)
         return True
 
     def _clone(self, source: str) -> None:
@@ -205,10 +201,29 @@ class OdometryFusion:
         covariance = self._filter.P
         if not np.isfinite(covariance).all():
             raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer finite")
-        try:
-            np.linalg.cholesky(0.5 * (covariance + covariance.T) + 1e-12 * np.eye(len(covariance)))
-        except np.linalg.LinAlgError:
-            raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer positive definite") from None
+        _, failed = dpotrf(0.5 * (covariance + covariance.T) + self._jitter, lower=True)  # LAPACK's Cholesky
+        if failed:
+            raise FilterDiverged(f"the covariance at {self.time_s:.3f} s is no longer positive definite")
+
+
+def _wrap(angle: float) -> float:
+    """``angle`` (rad) wrapped to (-pi, pi]."""
+    return math.atan2(math.sin(angle), math.cos(angle))
+
+
+def _nis(innovation: np.ndarray, spread: np.ndarray) -> float:
+    """The normalised innovation squared, innovation' spread^-1 innovation, of a (2,) innovation with covariance
+    ``spread`` (2, 2), in closed form (numpy's solvers cost more in overhead than the sum)."""
+    (a, b), (c, d) = spread.tolist()
+    i, j = innovation.tolist()
+    return (i * (d * i - b * j) + j * (a * j - c * i)) / (a * d - b * c)
+
+
+def _residual(measured: np.ndarray, expected: np.ndarray) -> np.ndarray:
+    """measured - expected of (dx, dtheta), the turn wrapped."""
+    difference = measured - expected
+    difference[1] = _wrap(difference[1])
+    return difference
 
 
 @dataclass(frozen=True)

@@ -307,9 +307,8 @@ class GroundPlaneImage:
         fisheye = np.full(front.shape, np.nan)
         valid = np.zeros(front.shape[:-1], dtype=bool)
         for name, face_uv in (("front", front), ("bottom", bottom)):
-            mapped, seen = self.cubemap.face_to_fisheye(name, face_uv)
-            fisheye[seen] = mapped[seen]
-            valid |= seen
+            part = np.isfinite(face_uv).all(axis=-1)  # only the face's part of the GPI: the rest cannot be seen
+            fisheye[part], valid[part] = self.cubemap.face_to_fisheye(name, face_uv[part])  # NaN where not seen
         return fisheye, valid
 
     @functools.cached_property
@@ -529,18 +528,20 @@ def ortho_rectify(
     floor: FloorImage = DEFAULT_FLOOR_IMAGE,
     block: tuple[int, int] = DEFAULT_BLOCK,
     max_outside: float = 0.0,
+    corners: np.ndarray | None = None,
 ) -> OrthoRectification:
     """The ortho-rectified GPI (chapter 04) for the metric ``floor`` image.
 
     The board is found in ``gpi_image`` (the GPI of a frame of the board lying at ``placement``), and the
     homography GPI -> ortho-GPI fitted (``cv2.findHomography``, least squares) from the 3 x 5 inner corners of
     its 2 x 4-square block starting at inner corner ``block`` = (i, j) to where the block truly lies in
-    ``floor`` (40 x 80 mm for 20 mm squares). Raises ``GroundImageError`` when more than ``max_outside`` of
-    ``floor`` lies outside what the GPI shows, with an extent that fits. The table is kept on disk when the
-    GPI's is (``gpi.cache``).
+    ``floor`` (40 x 80 mm for 20 mm squares). ``corners``: the board's inner corners (N, 2) GPI pixels when
+    already found in ``gpi_image`` (``board_corners``), e.g. to try several floor images without searching again.
+    Raises ``GroundImageError`` when more than ``max_outside`` of ``floor`` lies outside what the GPI shows, with
+    an extent that fits. The table is kept on disk when the GPI's is (``gpi.cache``).
     """
     index = block_corner_indices(placement.board, block)
-    found = board_corners(gpi_image, gpi.floor, placement)[index]
+    found = (board_corners(gpi_image, gpi.floor, placement) if corners is None else np.asarray(corners))[index]
     truth = floor.base_to_pixel(placement.corners_world()[index, :2])
     rectification = OrthoRectification(gpi, _homography(found, truth), floor, found, gpi.cache)
     _check_extent(rectification.table, "the GPI (the front face's floor ahead, the bottom face's crop)", max_outside)
@@ -724,8 +725,10 @@ def route_difference(table: RemapTable, reference: RemapTable) -> RouteDifferenc
     reference_uv = np.stack([reference.map_x, reference.map_y], axis=-1).astype(np.float64)
     jacobian = np.stack([np.gradient(reference_uv, axis=1), np.gradient(reference_uv, axis=0)], axis=-1)
     common = table.valid & reference.valid & np.isfinite(jacobian).all(axis=(-2, -1))
-    shift = np.full(difference.shape, np.nan)
-    shift[common] = np.linalg.solve(jacobian[common], difference[common][..., None])[..., 0]
+    (a, b), (c, d) = np.moveaxis(jacobian[common], (-2, -1), (0, 1))
+    du, dv = difference[common].T
+    shift = np.full(difference.shape, np.nan)  # J^-1 d by Cramer's rule: numpy's batched solve is slower on 2 x 2
+    shift[common] = np.column_stack([d * du - b * dv, a * dv - c * du]) / (a * d - b * c)[:, None]
     pixels = np.where(common, np.linalg.norm(difference, axis=-1), np.nan)
     floor_mm = np.linalg.norm(shift, axis=-1) * table.floor.metres_per_pixel * 1e3
     return RouteDifference(pixels, floor_mm, float(common.mean()))

@@ -92,7 +92,12 @@ def integrate(increments, start=(0.0, 0.0, 0.0)) -> np.ndarray:
 
 
 def _sinc_cosc(phi):
-    """sin(phi)/phi and (1 - cos(phi))/phi, with the series near phi = 0."""
+    """sin(phi)/phi and (1 - cos(phi))/phi, with the series near phi = 0; floats for a float ``phi``."""
+    if isinstance(phi, float) and math.isfinite(phi):  # one angle (np.float64 is a float too): math is much faster
+        if abs(phi) < SMALL_ANGLE:
+            p2 = phi**2
+            return 1.0 - p2 / 6.0 + p2**2 / 120.0, phi * (0.5 - p2 / 24.0 + p2**2 / 720.0)
+        return math.sin(phi) / phi, 2.0 * math.sin(phi / 2.0) ** 2 / phi
     phi = np.asarray(phi, dtype=float)
     small = np.abs(phi) < SMALL_ANGLE
     safe = np.where(small, 1.0, phi)
@@ -106,10 +111,13 @@ def _sinc_cosc(phi):
 def arc_increment(v, omega, dt) -> np.ndarray:
     """The exact increment (..., 3) of driving ``dt`` seconds at rear-axle speed ``v`` (m/s) and yaw rate ``omega``
     (rad/s): a circular arc (a straight line when omega = 0), base_link never sliding sideways."""
-    v, omega, dt = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v, omega, dt)))
+    one = all(isinstance(a, float) for a in (v, omega, dt))  # one step, as the EKF predicts: no arrays needed
+    if not one:
+        v, omega, dt = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v, omega, dt)))
     phi, distance = omega * dt, v * dt
     sinc, cosc = _sinc_cosc(phi)
-    return np.stack([distance * sinc, distance * cosc, phi], axis=-1)
+    parts = [distance * sinc, distance * cosc, phi]
+    return np.array(parts) if one else np.stack(parts, axis=-1)
 
 
 # --------------------------------------------------------------------------------- the paper's model
