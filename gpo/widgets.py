@@ -21,6 +21,7 @@ from gpo.ground import (
     FloorImage,
     GroundImageError,
     analytic_table,
+    board_corners,
     front_face_corners,
     ground_plane_image,
     ortho_rectify,
@@ -286,6 +287,7 @@ def ortho_extent_panel(fisheye_image, camera, placement, mount=None) -> widgets.
     """
     gpi = ground_plane_image(fisheye_image, camera, placement, cache=False)
     gpi_image = gpi.table.apply(fisheye_image)
+    corners = board_corners(gpi_image, gpi.floor, placement)
     controls = {
         "near": _slider("near x [m]", 0.70, 0.55, 1.00, 0.01),
         "far": _slider("far x [m]", 0.90, 0.60, 1.10, 0.01),
@@ -300,7 +302,7 @@ def ortho_extent_panel(fisheye_image, camera, placement, mount=None) -> widgets.
             if floor.width * floor.height > MAX_PANEL_PIXELS:
                 print(f"{floor.width} x {floor.height} px is too many to redraw here: more mm per pixel or less floor")
                 return
-            ortho = ortho_rectify(gpi, gpi_image, placement, floor)
+            ortho = ortho_rectify(gpi, gpi_image, placement, floor, corners=corners)
         except GroundImageError as error:
             print(f"no ortho-GPI: {error}")
             return
@@ -689,9 +691,9 @@ def feature_matches_text(matches) -> str:
 def evaluation_panel(table, shown: tuple | None = None) -> widgets.VBox:
     """Every row of a Table 4 (``gpo.sim.table4.Table4``) on one path, under the alignment chosen.
 
-    ``table.evaluations[row][path]`` holds each row's estimate placed on the truth at its first pose; the panel
-    aligns it again (``gpo.metrics.evaluate``: ``origin``, ``se2``, ``se3`` or ``posyaw``; an alignment that moves
-    the whole path is the same from either start) and draws the paths over the truth and their position errors along
+    ``table.evaluations[row][path]`` holds each row's estimate placed on the truth at its first pose (``origin``,
+    shown as it is); for ``se2``, ``se3`` or ``posyaw`` the panel aligns it again (``gpo.metrics.evaluate``, once
+    per row, path and alignment; an alignment that moves the whole path is the same from either start) and draws the paths over the truth and their position errors along
     the distance travelled. ``shown``: the rows selected at first (default: the table's first three). One line a
     row reads out its APE RMSE and maximum, final position error in mm and % of the distance, and heading RMSE.
     """
@@ -715,13 +717,22 @@ def evaluation_panel(table, shown: tuple | None = None) -> widgets.VBox:
         ),
     }
 
+    aligned = {}  # (label, path, alignment) -> Evaluation, each computed once
+
+    def evaluated(label: str, path: str, alignment: str):
+        placed = table.evaluations[labels[label]][path]
+        if alignment == Alignment.ORIGIN:
+            return placed
+        if (label, path, alignment) not in aligned:
+            aligned[label, path, alignment] = evaluate(placed.estimate, placed.truth, alignment)
+        return aligned[label, path, alignment]
+
     def redraw(path: str, alignment: str, chosen: tuple[str, ...]) -> None:
         plt.close("all")
         if not chosen:
             print("choose at least one row")
             return
-        placed = {label: table.evaluations[labels[label]][path] for label in chosen}
-        evaluations = {label: evaluate(kept.estimate, kept.truth, alignment) for label, kept in placed.items()}
+        evaluations = {label: evaluated(label, path, alignment) for label in chosen}
         _, (left, right) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1, 1.2]})
         draw_evaluated_paths(evaluations, ax=left)
         left.set_title(f"{path}, aligned by {alignment}")
