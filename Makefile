@@ -1,13 +1,17 @@
 # gpo: `make test` checks everything, `make demo` runs the main job into out/, `make lab` opens the notebooks.
 # `make book` builds the executed notebooks, without running them, into a static HTML site: out/book/index.html.
+# `make test-browser` runs every chapter in JupyterLab in Debian's Chromium (installed with apt when missing); `make
+# test` includes it.
 # Each creates .venv from environment.txt first when it is missing or environment.txt has changed.
 
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.environment.stamp
+CHROMIUM := /usr/bin/chromium
+SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 
-.PHONY: test demo lab book env clean
+.PHONY: test test-browser recordings demo lab book env clean
 
 env: $(STAMP)
 
@@ -18,12 +22,23 @@ $(STAMP): environment.txt pyproject.toml
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
 	touch $(STAMP)
 
-test: $(STAMP)
-	$(BIN)/ruff check .
-	$(BIN)/python -m gpo recording sample short1 short2 short3 long1 long2 long3 \
+$(CHROMIUM):
+	$(SUDO) apt-get update -qq
+	$(SUDO) DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
+
+# the simulated recordings and Table 4's runs that tests and chapters read, made once into the cache
+recordings: $(STAMP)
+	$(BIN)/python -m gpo recording --jobs 2 long3 long1 long2 sample short1 short2 short3 \
 		downward-wood downward-raised downward-industrial
 	$(BIN)/python -m gpo table4
-	$(BIN)/python -m pytest -p no:cacheprovider
+
+# two workers (pytest-xdist), each test file on one of them: a notebook's cells share one kernel
+test: $(STAMP) $(CHROMIUM) recordings
+	$(BIN)/ruff check .
+	$(BIN)/python -m pytest -p no:cacheprovider -n 2 --dist loadfile
+
+test-browser: $(STAMP) $(CHROMIUM) recordings
+	$(BIN)/python -m pytest -p no:cacheprovider tests/browser
 
 demo: $(STAMP)
 	$(BIN)/python -m gpo demo --out out

@@ -5,12 +5,14 @@ python -m gpo run BAG --config RIG.yaml --out traj.tum [--method gpo|gpo-exact|g
 python -m gpo run BAG ... --write-bag OUT.bag    also a copy of the bag with the estimate as nav_msgs/Odometry
 python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
 python -m gpo table4 [PATH ...]   the first paper's Table 4 (and the second's Table 2 metrics) on long1-3
+python -m gpo recording [NAME ...] [--jobs N]    the cached bags of simulated presets, rendered N at a time if needed
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from matplotlib.figure import Figure
@@ -25,6 +27,20 @@ from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording, simulate, wri
 from gpo.sim.table4 import PATHS as TABLE4_PATHS
 from gpo.sim.table4 import reproduce_table4
 from gpo.trajectory import Trajectory
+
+
+def recordings(names: list[str], jobs: int = 1) -> list[Path]:
+    """The bags of presets ``names`` (``gpo.sim.record.recording``); with ``jobs`` > 1 those not yet cached are rendered
+    that many at a time in processes of their own, without frame progress bars, each printed when done."""
+    if jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, not {jobs}")
+    if jobs == 1:
+        return [recording(name) for name in names]
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        pending = {pool.submit(recording, name, progress=False): name for name in names}
+        for done in as_completed(pending):
+            print(f"{pending[done]}: ready", flush=True)
+        return [job.result() for job in pending]
 
 
 def demo(out: Path) -> list[Path]:
@@ -175,6 +191,9 @@ def main(argv: list[str] | None = None) -> int:
     sample_parser.add_argument("--out", type=Path, default=Path("data"), help="output folder (default: data)")
     recording_parser = commands.add_parser("recording", help="print the cached bags of presets, making them if needed")
     recording_parser.add_argument("names", nargs="*", default=["sample"], choices=sorted(PRESETS), metavar="NAME")
+    recording_parser.add_argument(
+        "--jobs", type=int, default=1, help="presets rendered at once, one process each (default 1: with progress bars)"
+    )
     calibrate_parser = commands.add_parser("calibrate", help="calibrate a camera from chessboard images")
     calibrate_parser.add_argument("images", nargs="+", type=Path, help="image files of the board")
     calibrate_parser.add_argument("--board", required=True, help="inner corners per row x per column, e.g. 7x5")
@@ -214,8 +233,8 @@ def main(argv: list[str] | None = None) -> int:
         elif args.command == "info":
             print(describe(args.bag))
         elif args.command == "recording":
-            for name in args.names:
-                print(recording(name))
+            for path in recordings(args.names, args.jobs):
+                print(path)
         elif args.command == "calibrate":
             result = main_calibrate(args.images, args.board, args.square, args.model, args.out)
             return 0 if result.ok else 1

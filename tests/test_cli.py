@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -106,3 +107,21 @@ def test_evaluate_names_the_file_with_bad_numbers(tmp_path, capsys):
     estimate.write_text(truth.read_text().replace("1.0 0.0 0.0", "nan 0.0 0.0"))
     assert main(["evaluate", str(estimate), str(truth)]) == 1
     assert capsys.readouterr().err == f"error: {estimate}: positions and quaternions must be finite numbers\n"
+
+
+def test_recordings_rendered_at_once_are_the_bag_rendered_alone(tmp_path, monkeypatch, capsys):
+    """Two processes rendering the same preset at once leave one bag, byte for byte the one rendered alone."""
+    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path / "alone"))
+    alone = recording("test", progress=False)
+    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path / "at-once"))
+    assert main(["recording", "test", "test", "--jobs", "2"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[:2] == ["test: ready", "test: ready"]
+    assert printed[2] == printed[3] == str(tmp_path / "at-once" / alone.name)
+    assert Path(printed[2]).read_bytes() == alone.read_bytes()
+    assert [path.name for path in (tmp_path / "at-once").iterdir()] == [alone.name]
+
+
+def test_recording_refuses_fewer_than_one_job(capsys):
+    assert main(["recording", "test", "--jobs", "0"]) != 0
+    assert "--jobs must be at least 1, not 0" in capsys.readouterr().err

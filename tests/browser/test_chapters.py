@@ -1,0 +1,156 @@
+"""Every chapter as a reader meets it, in JupyterLab in Chromium: all cells run without an error, and one control of a
+widget panel, moved, changes what the panel shows. A screenshot of each panel goes to ``out/screenshots/``.
+
+nbval proves that every cell runs; only a browser shows that a panel's figure is redrawn when a control moves.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import time
+from pathlib import Path
+from typing import NamedTuple
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+SCREENSHOTS = ROOT / "out" / "screenshots"
+RUN_ALL_S = 300.0  # the slowest chapter runs in about a minute on two cores
+UPDATE_S = 60.0
+KERNEL_START_S = 60.0
+VIEWPORT = {"width": 1400, "height": 1000}
+ERROR_MARKS = ("Traceback (most recent call last)", "Error displaying widget")
+
+
+class Move(NamedTuple):
+    """The control labelled ``label`` set to ``value`` (a slider's typed value, or the option chosen)."""
+
+    label: str
+    value: str
+
+
+MOVES = {
+    "00_overview": Move("t [s]", "2.00"),
+    "01_eucm_calibration": Move("model", "pinhole"),
+    "01_eucm_model": Move("alpha", "0.50"),
+    "02_cubemap": Move("face [px]", "300"),
+    "03_ground_plane_image": Move("ahead [m]", "0.40"),
+    "04_ortho_gpi": Move("half width [m]", "0.12"),
+    "05_klt_flow": Move("window [px]", "15"),
+    "06_kinematics": Move("delta [deg]", "30.00"),
+    "07_ekf_fusion": Move("floor sigma v [m/s]", "0.01"),
+    "08_floor_features": Move("t", "0.90"),
+    "09_evaluation": Move("alignment", "se2"),
+}
+
+
+def test_every_chapter_has_a_move():
+    assert sorted(MOVES) == sorted(path.stem for path in (ROOT / "notebooks").glob("*.ipynb"))
+
+
+def _menu(page, menu: str, item: str) -> None:
+    page.locator(".lm-MenuBar-itemLabel", has_text=re.compile(f"^{re.escape(menu)}$")).click()
+    page.locator(".lm-Menu-itemLabel", has_text=re.compile(f"^{re.escape(item)}$")).click()
+
+
+def _prompts(page) -> list[str]:
+    return page.locator(".jp-Notebook .jp-CodeCell .jp-InputPrompt").all_inner_texts()
+
+
+def _errors(page) -> list[str]:
+    texts = page.locator(".jp-Notebook .jp-OutputArea-output").all_inner_texts()
+    return [text for text in texts if any(mark in text for mark in ERROR_MARKS)]
+
+
+def _wait_for_kernel(page, lab, path: str) -> None:
+    """Wait until the chapter's kernel has started and is idle, choosing the chapter's own kernel if asked."""
+    deadline = time.monotonic() + KERNEL_START_S
+    while time.monotonic() < deadline:
+        dialog = page.locator(".jp-Dialog", has_text="Select Kernel")
+        if dialog.is_visible():
+            dialog.locator(".jp-Dialog-button.jp-mod-accept").click()
+        sessions = lab.request("GET", "/api/sessions")
+        if any(session["path"] == path and session["kernel"]["execution_state"] == "idle" for session in sessions):
+            return
+        page.wait_for_timeout(500)
+    pytest.fail(f"no idle kernel for {path} after {KERNEL_START_S:.0f} s")
+
+
+def _run_all(page) -> None:
+    """Clear every output (and execution count), run all cells, and wait until none is queued or running and each
+    has run, or an error stopped the run."""
+    _menu(page, "Edit", "Clear Outputs of All Cells")
+    _menu(page, "Run", "Run All Cells")
+    deadline = time.monotonic() + RUN_ALL_S
+    while time.monotonic() < deadline:
+        prompts = _prompts(page)
+        busy = any("*" in prompt for prompt in prompts)
+        if not busy and (all(re.search(r"\[\d+\]", prompt) for prompt in prompts) or _errors(page)):
+            return
+        page.wait_for_timeout(500)
+    pytest.fail(f"the cells were still running after {RUN_ALL_S:.0f} s: {_prompts(page)}")
+
+
+def _description(page, label: str):
+    """The description ``label`` of a control; the control is its parent."""
+    return page.locator("label.widget-label", has_text=re.compile(f"^{re.escape(label)}$")).first
+
+
+def _move(control, value: str) -> None:
+    classes = control.get_attribute("class")
+    if "widget-slider" in classes:
+        readout = control.locator(".widget-readout")
+        readout.click()
+        readout.press("Control+A")
+        readout.type(value)
+        readout.press("Enter")
+    elif "widget-dropdown" in classes:
+        control.locator("select").select_option(label=value)
+    elif "widget-toggle-buttons" in classes:
+        control.locator(f"button[data-value='{value}']").click()
+    else:
+        raise AssertionError(f"no way to move a control of classes {classes!r}")
+
+
+def _shown(output) -> str:
+    """A digest of what a panel's output shows: its text and its images' data."""
+    images = output.locator("img").evaluate_all("images => images.map(image => image.src)")
+    return hashlib.sha256((output.inner_text() + "".join(images)).encode()).hexdigest()
+
+
+@pytest.mark.parametrize("chapter", sorted(MOVES))
+def test_chapter_runs_and_its_panel_redraws(lab, browser, chapter):
+    notebook = ROOT / "notebooks" / f"{chapter}.ipynb"
+    saved = notebook.read_bytes()
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    (SCREENSHOTS / f"{chapter}-failed.png").unlink(missing_ok=True)
+    page = browser.new_page(viewport=VIEWPORT)
+    try:
+        page.goto(lab.address(f"notebooks/{chapter}.ipynb"))
+        _wait_for_kernel(page, lab, f"notebooks/{chapter}.ipynb")
+        _run_all(page)
+        assert _errors(page) == []
+
+        move = MOVES[chapter]
+        description = _description(page, move.label)
+        control = description.locator("xpath=..")
+        cell = page.locator(".jp-Notebook .jp-CodeCell", has=description)
+        output = cell.locator(".widget-output").first
+        output.locator("img, pre").first.wait_for()
+        before = _shown(output)
+        _move(control, move.value)
+        deadline = time.monotonic() + UPDATE_S
+        while _shown(output) == before and time.monotonic() < deadline:
+            page.wait_for_timeout(200)
+        assert _shown(output) != before, f"{move.label} set to {move.value}: the panel did not change"
+        page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").wait_for(timeout=UPDATE_S * 1e3)
+        assert _errors(page) == []
+        cell.screenshot(path=SCREENSHOTS / f"{chapter}.png")
+    except Exception:
+        page.screenshot(path=SCREENSHOTS / f"{chapter}-failed.png", full_page=True)
+        raise
+    finally:
+        page.close()
+        lab.shut_down_kernels()
+    assert notebook.read_bytes() == saved, "the chapter on disk was rewritten"
