@@ -19,6 +19,7 @@ SCREENSHOTS = ROOT / "out" / "screenshots"
 RUN_ALL_S = 300.0  # the slowest chapter runs in about a minute on two cores
 UPDATE_S = 60.0
 KERNEL_START_S = 60.0
+SETTLE_S = 1.0  # an output unchanged this long, its kernel idle, is complete
 VIEWPORT = {"width": 1400, "height": 1000}
 ERROR_MARKS = ("Traceback (most recent call last)", "Error displaying widget")
 
@@ -63,6 +64,26 @@ def _errors(page) -> list[str]:
     return [text for text in texts if any(mark in text for mark in ERROR_MARKS)]
 
 
+def _kernel_idle(lab, path: str) -> bool:
+    """Whether the kernel of notebook ``path`` has started and is idle, as the server sees it."""
+    sessions = lab.request("GET", "/api/sessions")
+    return any(session["path"] == path and session["kernel"]["execution_state"] == "idle" for session in sessions)
+
+
+def _settled(page, lab, path: str, output) -> str:
+    """``_shown(output)`` once the kernel is idle and the output has not changed for ``SETTLE_S``."""
+    deadline = time.monotonic() + UPDATE_S
+    shown, since = _shown(output), time.monotonic()
+    while time.monotonic() < deadline:
+        page.wait_for_timeout(200)
+        now = _shown(output)
+        if now != shown:
+            shown, since = now, time.monotonic()
+        elif time.monotonic() - since >= SETTLE_S and _kernel_idle(lab, path):
+            return shown
+    pytest.fail(f"the panel was still changing, or its kernel busy, after {UPDATE_S:.0f} s")
+
+
 def _wait_for_kernel(page, lab, path: str) -> None:
     """Wait until the chapter's kernel has started and is idle, choosing the chapter's own kernel if asked."""
     deadline = time.monotonic() + KERNEL_START_S
@@ -70,8 +91,7 @@ def _wait_for_kernel(page, lab, path: str) -> None:
         dialog = page.locator(".jp-Dialog", has_text="Select Kernel")
         if dialog.is_visible():
             dialog.locator(".jp-Dialog-button.jp-mod-accept").click()
-        sessions = lab.request("GET", "/api/sessions")
-        if any(session["path"] == path and session["kernel"]["execution_state"] == "idle" for session in sessions):
+        if _kernel_idle(lab, path):
             return
         page.wait_for_timeout(500)
     pytest.fail(f"no idle kernel for {path} after {KERNEL_START_S:.0f} s")
@@ -119,16 +139,25 @@ def _shown(output) -> str:
     return hashlib.sha256((output.inner_text() + "".join(images)).encode()).hexdigest()
 
 
+def _screenshot(page, cell, path: Path) -> None:
+    """A picture of the page with ``cell`` and its panel at the top."""
+    cell.evaluate("cell => cell.scrollIntoView({block: 'start'})")
+    cell.locator("img").evaluate_all("images => Promise.all(images.map(image => image.decode()))")
+    page.wait_for_timeout(500)
+    page.screenshot(path=path)
+
+
 @pytest.mark.parametrize("chapter", sorted(MOVES))
 def test_chapter_runs_and_its_panel_redraws(lab, browser, chapter):
-    notebook = ROOT / "notebooks" / f"{chapter}.ipynb"
+    path = f"notebooks/{chapter}.ipynb"
+    notebook = ROOT / path
     saved = notebook.read_bytes()
     SCREENSHOTS.mkdir(parents=True, exist_ok=True)
     (SCREENSHOTS / f"{chapter}-failed.png").unlink(missing_ok=True)
     page = browser.new_page(viewport=VIEWPORT)
     try:
-        page.goto(lab.address(f"notebooks/{chapter}.ipynb"))
-        _wait_for_kernel(page, lab, f"notebooks/{chapter}.ipynb")
+        page.goto(lab.address(path))
+        _wait_for_kernel(page, lab, path)
         _run_all(page)
         assert _errors(page) == []
 
@@ -137,16 +166,14 @@ def test_chapter_runs_and_its_panel_redraws(lab, browser, chapter):
         control = description.locator("xpath=..")
         cell = page.locator(".jp-Notebook .jp-CodeCell", has=description)
         output = cell.locator(".widget-output").first
-        output.locator("img, pre").first.wait_for()
-        before = _shown(output)
+        before = _settled(page, lab, path, output)
         _move(control, move.value)
         deadline = time.monotonic() + UPDATE_S
         while _shown(output) == before and time.monotonic() < deadline:
             page.wait_for_timeout(200)
-        assert _shown(output) != before, f"{move.label} set to {move.value}: the panel did not change"
-        page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").wait_for(timeout=UPDATE_S * 1e3)
+        assert _settled(page, lab, path, output) != before, f"{move.label} set to {move.value}: the panel stayed"
         assert _errors(page) == []
-        cell.screenshot(path=SCREENSHOTS / f"{chapter}.png")
+        _screenshot(page, cell, SCREENSHOTS / f"{chapter}.png")
     except Exception:
         page.screenshot(path=SCREENSHOTS / f"{chapter}-failed.png", full_page=True)
         raise
