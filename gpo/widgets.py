@@ -693,9 +693,10 @@ def evaluation_panel(table, shown: tuple | None = None) -> widgets.VBox:
 
     ``table.evaluations[row][path]`` holds each row's estimate placed on the truth at its first pose (``origin``,
     shown as it is); for ``se2``, ``se3`` or ``posyaw`` the panel aligns it again (``gpo.metrics.evaluate``, once
-    per row, path and alignment; an alignment that moves the whole path is the same from either start) and draws the paths over the truth and their position errors along
-    the distance travelled. ``shown``: the rows selected at first (default: the table's first three). One line a
-    row reads out its APE RMSE and maximum, final position error in mm and % of the distance, and heading RMSE.
+    per row, path and alignment; an alignment that moves the whole path is the same from either start) and draws
+    the paths over the truth and their position errors along the distance travelled. ``shown``: the rows selected
+    at first (default: the table's first three). One line a row reads out its APE RMSE and maximum, final position
+    error in mm and % of the distance, and heading RMSE.
     """
     labels = {row.label: row for row in table.rows}
     style = {"description_width": "initial"}
