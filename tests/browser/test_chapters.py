@@ -6,13 +6,17 @@ nbval proves that every cell runs; only a browser shows that a panel's figure is
 
 from __future__ import annotations
 
+import base64
 import hashlib
+import io
 import re
 import time
 from pathlib import Path
 from typing import NamedTuple
 
+import numpy as np
 import pytest
+from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[2]
 SCREENSHOTS = ROOT / "out" / "screenshots"
@@ -37,7 +41,7 @@ MOVES = {
     "01_eucm_model": Move("alpha", "0.50"),
     "02_cubemap": Move("face [px]", "300"),
     "03_ground_plane_image": Move("ahead [m]", "0.40"),
-    "04_ortho_gpi": Move("half width [m]", "0.12"),
+    "04_ortho_gpi": Move("half width [m]", "0.08"),
     "05_klt_flow": Move("window [px]", "15"),
     "06_kinematics": Move("delta [deg]", "30.00"),
     "07_ekf_fusion": Move("floor sigma v [m/s]", "0.01"),
@@ -133,6 +137,17 @@ def _move(control, value: str) -> None:
         raise AssertionError(f"no way to move a control of classes {classes!r}")
 
 
+def _ink(output) -> float:
+    """The share of the panel's figure that is not background (0 without a figure): a figure sent half drawn is
+    mostly white."""
+    sources = output.locator("img").evaluate_all("images => images.map(image => image.src)")
+    if not sources:
+        return 0.0
+    png = base64.b64decode(sources[0].split(",", 1)[1])
+    grey = np.asarray(Image.open(io.BytesIO(png)).convert("L"))
+    return float(np.mean(grey < 250))
+
+
 def _shown(output) -> str:
     """A digest of what a panel's output shows: its text and its images' data."""
     images = output.locator("img").evaluate_all("images => images.map(image => image.src)")
@@ -167,11 +182,13 @@ def test_chapter_runs_and_its_panel_redraws(lab, browser, chapter):
         cell = page.locator(".jp-Notebook .jp-CodeCell", has=description)
         output = cell.locator(".widget-output").first
         before = _settled(page, lab, path, output)
+        ink = _ink(output)
         _move(control, move.value)
         deadline = time.monotonic() + UPDATE_S
         while _shown(output) == before and time.monotonic() < deadline:
             page.wait_for_timeout(200)
         assert _settled(page, lab, path, output) != before, f"{move.label} set to {move.value}: the panel stayed"
+        assert _ink(output) >= 0.5 * ink, f"{move.label} set to {move.value}: the figure came back half drawn"
         assert _errors(page) == []
         _screenshot(page, cell, SCREENSHOTS / f"{chapter}.png")
     except Exception:
