@@ -70,6 +70,18 @@ def _slider(description: str, value: float, low: float, high: float, step: float
     )
 
 
+def _int_slider(description: str, value: int, low: int, high: int, step: int = 1) -> widgets.IntSlider:
+    return widgets.IntSlider(
+        value=value,
+        min=low,
+        max=high,
+        step=step,
+        description=description,
+        continuous_update=False,
+        style={"description_width": "initial"},
+    )
+
+
 def eucm_panel(camera: EUCM = T265_LIKE, camera_height: float = 0.12) -> widgets.VBox:
     """Sliders for alpha, beta and the focal length f (fx = fy = f, pixels) of ``camera``.
 
@@ -242,14 +254,7 @@ def gpi_extent_panel(fisheye_image, camera, placement, mount=None) -> widgets.VB
     corners = front_face_corners(fisheye_image, Cubemap(camera), placement)
     default = ground_plane_image(fisheye_image, camera, placement, corners=corners, cache=False)
     ahead = _slider("ahead [m]", 0.30, 0.05, 1.00, 0.01)
-    rows = widgets.IntSlider(
-        value=default.bottom_rows,
-        min=1,
-        max=default.cubemap.face_size,
-        description="bottom rows",
-        continuous_update=False,
-        style={"description_width": "initial"},
-    )
+    rows = _int_slider("bottom rows", default.bottom_rows, 1, default.cubemap.face_size)
 
     def redraw(ahead_m: float, bottom_rows: int) -> None:
         plt.close("all")
@@ -374,21 +379,9 @@ def klt_flow_panel(floor_images, mask=None, parameters: KLTParameters | None = N
     base = parameters or KLTParameters()
     style = {"description_width": "initial"}
     controls = {
-        "window_px": widgets.IntSlider(
-            value=base.window_px, min=5, max=51, step=2, description="window [px]", continuous_update=False, style=style
-        ),
-        "pyramid_levels": widgets.IntSlider(
-            value=base.pyramid_levels, min=0, max=6, description="pyramid levels", continuous_update=False, style=style
-        ),
-        "max_corners": widgets.IntSlider(
-            value=base.max_corners,
-            min=5,
-            max=400,
-            step=5,
-            description="max corners",
-            continuous_update=False,
-            style=style,
-        ),
+        "window_px": _int_slider("window [px]", base.window_px, 5, 51, step=2),
+        "pyramid_levels": _int_slider("pyramid levels", base.pyramid_levels, 0, 6),
+        "max_corners": _int_slider("max corners", base.max_corners, 5, 400, step=5),
         "quality_level": widgets.FloatLogSlider(
             value=base.quality_level,
             base=10,
@@ -628,17 +621,8 @@ def feature_panel(previous_image, current_image, parameters: FeatureParameters |
             description="C",
             style=style,
         ),
-        "orientation_bins": widgets.IntSlider(
-            value=base.orientation_bins,
-            min=10,
-            max=360,
-            description="orientation bins",
-            continuous_update=False,
-            style=style,
-        ),
-        "length_bins": widgets.IntSlider(
-            value=base.length_bins, min=10, max=320, description="length bins", continuous_update=False, style=style
-        ),
+        "orientation_bins": _int_slider("orientation bins", base.orientation_bins, 10, 360),
+        "length_bins": _int_slider("length bins", base.length_bins, 10, 320),
         "ratio": _slider("ratio test", base.ratio, 0.5, 1.0, 0.01),
     }
     found = {}  # detector -> the previous and current frames' keypoints and the current frame's detection seconds
