@@ -1,4 +1,4 @@
-"""One YAML file describes a rig: its camera, where the camera sits on the robot, and its topics.
+"""One YAML file describes a rig and a run, checked by one schema (``ConfigFile``).
 
 ::
 
@@ -23,21 +23,242 @@
       image: /camera/fisheye1/image_raw
       camera_info: /camera/fisheye1/camera_info
 
-Later chapters add their own sections (the floor image, the motion estimator, the kinematic
-model); ``load_rig`` reads the rig and leaves them alone.
+and the run's sections: ``floor_image``, ``klt``, ``kinematics``, ``odometry``, ``fusion``, ``features``
+(``gpo.pipeline.load_config``). Every section and key is checked before anything runs: types, ranges, finite
+numbers, and unknown keys at every level (with the nearest known one). The ``klt``, ``fusion`` and ``features``
+sections are the fields of ``KLTParameters``, ``FusionSettings`` and ``FeatureParameters`` themselves, so a field
+added there is a key of the file at once; a key of the other sections is one line of its section below.
+Errors name the file, the key and what is allowed; YAML errors name the line. A document whose aliases would
+expand beyond ``MAX_NODES`` nodes (a "billion laughs") is refused before it is built.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import difflib
+import re
+import typing
+from dataclasses import fields, is_dataclass
 from pathlib import Path
+from typing import Annotated, Any
 
 import numpy as np
 import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from scipy.spatial.transform import Rotation
 
 from gpo.calibfiles import camera_from_kalibr, camera_to_kalibr, load_kalibr
+from gpo.features import FeatureParameters
+from gpo.flow import KLTParameters
+from gpo.fusion import FusionSettings
+from gpo.outputs import write_text
 from gpo.rig import CameraMount, Rig
+
+MAX_BYTES = 1_000_000
+"""The largest config file read, bytes."""
+MAX_NODES = 100_000
+"""The most YAML nodes a config may hold once its aliases are expanded."""
+
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+Name = Annotated[str, Field(min_length=1)]
+Vector3 = tuple[float, float, float]
+
+
+class Section(BaseModel):
+    """A mapping of the file: its keys are its fields, nothing else; numbers finite."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class CameraSection(Section):
+    """A Kalibr camchain entry (``gpo.calibfiles``); Kalibr's extrinsic keys are allowed and not read."""
+
+    camera_model: Name
+    intrinsics: list[float]
+    distortion_model: str = "none"
+    distortion_coeffs: list[float] | None = None
+    resolution: tuple[Annotated[int, Field(ge=1)], Annotated[int, Field(ge=1)]]
+    rostopic: str | None = None
+    cam_overlaps: list[int] | None = None
+    T_cam_imu: list[list[float]] | None = None
+    T_cn_cnm1: list[list[float]] | None = None
+    timeshift_cam_imu: float | None = None
+
+
+class MountSection(Section):
+    """The optical frame in base_link: ``position_m`` (metres) and ``quaternion_xyzw`` are read; ``rpy_deg``
+    (roll, pitch, yaw of the camera's body frame, degrees), ``height_m``, ``pitch_deg`` and ``roll_deg`` are for
+    people and only checked."""
+
+    position_m: Vector3
+    quaternion_xyzw: tuple[float, float, float, float]
+    rpy_deg: Vector3 | None = None
+    height_m: float | None = None
+    pitch_deg: float | None = None
+    roll_deg: float | None = None
+
+    @field_validator("quaternion_xyzw")
+    @classmethod
+    def _unit_length_possible(cls, value):
+        if np.linalg.norm(value) < 1e-9:
+            raise ValueError("a rotation's quaternion cannot be all zeros")
+        return value
+
+
+class TopicsSection(Section):
+    image: Name
+    camera_info: str = ""
+
+
+class BoardSection(Section):
+    """A chessboard lying on the floor: ``squares`` (per row, per column), square and margin sizes (metres), and
+    where it lay in base_link (``x_m``, ``y_m``, ``yaw_deg``)."""
+
+    squares: tuple[Annotated[int, Field(ge=2)], Annotated[int, Field(ge=2)]]
+    square_m: Positive
+    margin_m: NonNegative
+    x_m: float
+    y_m: float
+    yaw_deg: float
+
+
+class FloorImageSection(Section):
+    """The floor image: extent (metres, base_link), pixel size, and the route that makes it (``gpo.pipeline``);
+    unset keys take the pipeline's defaults."""
+
+    x_range_m: tuple[float, float] | None = None
+    y_range_m: tuple[float, float] | None = None
+    metres_per_pixel: Positive | None = None
+    route: str = "analytic"
+    board_image: str | None = None
+    board: BoardSection | None = None
+
+
+class KinematicsSection(Section):
+    wheelbase_m: Positive
+    rear_to_reference_m: NonNegative
+
+
+class OdometrySection(Section):
+    method: str | None = None
+    vector: str | None = None
+    max_gap_s: Positive | None = None
+
+
+class ConfigFile(Section):
+    """The whole file: the rig (``name``, ``camera`` or ``camchain``, ``mount``, ``rate_hz``, ``frame_id``,
+    ``topics``) and the run's sections."""
+
+    name: Name
+    camera: CameraSection | None = None
+    camchain: str | None = None
+    camchain_camera: str | None = None
+    mount: MountSection
+    rate_hz: Positive
+    frame_id: Name
+    topics: TopicsSection
+    floor_image: FloorImageSection = FloorImageSection()
+    klt: KLTParameters = KLTParameters()
+    kinematics: KinematicsSection | None = None
+    odometry: OdometrySection = OdometrySection()
+    fusion: FusionSettings = FusionSettings()
+    features: FeatureParameters = FeatureParameters()
+
+    @model_validator(mode="after")
+    def _one_camera(self):
+        if (self.camera is None) == (self.camchain is None):
+            raise ValueError("give either 'camera' (a Kalibr camchain entry) or 'camchain' (a camchain file), one")
+        return self
+
+
+def read_yaml(path) -> Any:
+    """The YAML document of the file ``path``; errors name the file (and the line, for YAML errors)."""
+    path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder; expected a YAML file")
+    if not path.is_file():
+        raise FileNotFoundError(f"no file {path}: expected a YAML file")
+    if path.stat().st_size > MAX_BYTES:
+        raise ValueError(f"{path} is {path.stat().st_size} bytes; a config is at most {MAX_BYTES}")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"{path} is not a text file (UTF-8); expected YAML") from None
+    loader = yaml.SafeLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is not None and _expanded_nodes(node, {}) > MAX_NODES:
+            raise ValueError(f"{path}: its aliases expand to more than {MAX_NODES} YAML nodes; refused")
+        return None if node is None else loader.construct_document(node)
+    except yaml.MarkedYAMLError as error:
+        mark = error.problem_mark or error.context_mark
+        where = f", line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ValueError(f"{path}{where}: not valid YAML: {error.problem or error.context}") from None
+    except yaml.YAMLError as error:
+        raise ValueError(f"{path}: not valid YAML: {error}") from None
+    finally:
+        loader.dispose()
+
+
+def _expanded_nodes(node: yaml.Node, counted: dict[int, int]) -> int:
+    """How many nodes ``node`` becomes with every alias expanded (each shared node counted once per use)."""
+    if id(node) in counted:
+        return counted[id(node)]
+    counted[id(node)] = 1  # a node that refers to itself counts once
+    if isinstance(node, yaml.SequenceNode):
+        total = 1 + sum(_expanded_nodes(child, counted) for child in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        total = 1 + sum(_expanded_nodes(k, counted) + _expanded_nodes(v, counted) for k, v in node.value)
+    else:
+        total = 1
+    counted[id(node)] = total
+    return total
+
+
+def read_config(path) -> ConfigFile:
+    """The checked config file ``path`` (``ConfigFile``); a ValueError lists every problem, each with the key."""
+    path = Path(path)
+    document = read_yaml(path)
+    if not isinstance(document, dict):
+        raise ValueError(
+            f"{path}: a config is a YAML mapping of {', '.join(ConfigFile.model_fields)}; got {type(document).__name__}"
+        )
+    try:
+        return ConfigFile.model_validate(document)
+    except ValidationError as error:
+        raise ValueError(f"{path}: " + "\n  ".join(_problem(e) for e in error.errors()[:8])) from None
+
+
+def _problem(error: dict) -> str:
+    """One schema error as people read it: the key's path, what is wrong, what is allowed."""
+    location = [part for part in error["loc"] if not isinstance(part, int)]
+    where = ".".join(str(part) for part in error["loc"]) or "the file"
+    if error["type"] in ("extra_forbidden", "unexpected_keyword_argument"):
+        known = _keys(location[:-1])
+        close = difflib.get_close_matches(str(location[-1]), known, n=1)
+        hint = f"did you mean {close[0]}? " if close else ""
+        section = ".".join(map(str, location[:-1])) or "the file"
+        return f"{where}: unknown key; {hint}the keys of {section} are {', '.join(known)}"
+    message = re.sub(r" or (an )?instance of \w+", "", error["msg"].removeprefix("Value error, "))
+    if error["type"] == "missing":
+        return f"{where}: missing; it is required"
+    shown = repr(error["input"])
+    return f"{where}: {message} (got {shown if len(shown) < 60 else shown[:57] + '...'})"
+
+
+def _keys(location: list) -> list[str]:
+    """The keys allowed at ``location`` (a list of keys from the top of the file)."""
+    kind: Any = ConfigFile
+    for key in location:
+        hints = typing.get_type_hints(kind)
+        kind = next((a for a in (hints[key], *typing.get_args(hints[key])) if _has_keys(a)), None)
+        if kind is None:
+            return []
+    return [f.name for f in fields(kind)] if is_dataclass(kind) else list(kind.model_fields)
+
+
+def _has_keys(kind) -> bool:
+    return isinstance(kind, type) and (is_dataclass(kind) or issubclass(kind, BaseModel))
 
 
 def rig_to_dict(rig: Rig) -> dict:
@@ -60,59 +281,43 @@ def rig_to_dict(rig: Rig) -> dict:
 
 
 def save_rig(path, rig: Rig) -> Path:
-    """Write ``rig`` as a rig config YAML; return the path."""
-    path = Path(path)
-    path.write_text(yaml.safe_dump(rig_to_dict(rig), sort_keys=False, default_flow_style=None))
-    return path
+    """Write ``rig`` as a rig config YAML (to a temporary name, then renamed); return the path."""
+    return write_text(path, yaml.safe_dump(rig_to_dict(rig), sort_keys=False, default_flow_style=None))
 
 
 def load_rig(path) -> Rig:
     """The rig of a config YAML; errors name the file and the missing or bad field."""
     path = Path(path)
-    document = yaml.safe_load(path.read_text())
-    if not isinstance(document, Mapping):
-        raise ValueError(f"{path}: a rig config is a YAML mapping with name, camera, mount, rate_hz, frame_id, topics")
-    camera = _camera(document, path)
-    mount = _section(document, "mount", path)
-    position = np.asarray(_field(mount, "position_m", path, "mount"), dtype=float)
-    quaternion = np.asarray(_field(mount, "quaternion_xyzw", path, "mount"), dtype=float)
-    if position.shape != (3,) or quaternion.shape != (4,) or np.linalg.norm(quaternion) < 1e-9:
-        raise ValueError(f"{path}: mount needs position_m (3 numbers, metres) and quaternion_xyzw (4 numbers)")
-    topics = _section(document, "topics", path)
+    return rig_from_config(read_config(path), path)
+
+
+def rig_from_config(config: ConfigFile, path: Path) -> Rig:
+    """The rig of the checked config file ``config``, read from ``path`` (a camchain is relative to it)."""
+    mount = config.mount
     return Rig(
-        name=str(_field(document, "name", path)),
-        camera=camera,
-        mount=CameraMount(position, Rotation.from_quat(quaternion)),
-        rate_hz=float(_field(document, "rate_hz", path)),
-        image_topic=str(_field(topics, "image", path, "topics")),
-        info_topic=str(topics.get("camera_info", "")),
-        frame_id=str(_field(document, "frame_id", path)),
+        name=config.name,
+        camera=_camera(config, path),
+        mount=CameraMount(np.array(mount.position_m), Rotation.from_quat(mount.quaternion_xyzw)),
+        rate_hz=config.rate_hz,
+        image_topic=config.topics.image,
+        info_topic=config.topics.camera_info,
+        frame_id=config.frame_id,
     )
 
 
-def _camera(document: Mapping, path: Path):
-    if "camera" in document:
-        return camera_from_kalibr(document["camera"], f"{path}, camera")
-    if "camchain" in document:
-        cameras = load_kalibr(path.parent / document["camchain"])
-        name = document.get("camchain_camera", next(iter(cameras)))
-        if name not in cameras:
-            raise ValueError(
-                f"{path}: camchain_camera {name!r} is not in {document['camchain']} ({', '.join(cameras)})"
-            )
-        return cameras[name]
-    raise ValueError(f"{path}: no camera: give 'camera' (a Kalibr camchain entry) or 'camchain' (a camchain file)")
-
-
-def _section(document: Mapping, key: str, path: Path) -> Mapping:
-    section = _field(document, key, path)
-    if not isinstance(section, Mapping):
-        raise ValueError(f"{path}: '{key}' must be a mapping")
-    return section
-
-
-def _field(section: Mapping, key: str, path: Path, within: str | None = None):
-    if key not in section:
-        place = f"'{within}'" if within else "the file"
-        raise ValueError(f"{path}: {place} has no '{key}'")
-    return section[key]
+def _camera(config: ConfigFile, path: Path):
+    if config.camera is not None:
+        try:
+            return camera_from_kalibr(config.camera.model_dump(exclude_none=True), f"{path}, camera")
+        except ValueError as error:
+            if str(path) in str(error):
+                raise
+            raise ValueError(f"{path}, camera: {error}") from None
+    camchain = path.parent / config.camchain
+    cameras = load_kalibr(camchain) if not camchain.is_dir() else {}
+    if not cameras:
+        raise ValueError(f"{path}: camchain {config.camchain} is a folder; expected a Kalibr camchain YAML file")
+    name = config.camchain_camera or next(iter(cameras))
+    if name not in cameras:
+        raise ValueError(f"{path}: camchain_camera {name!r} is not in {config.camchain} ({', '.join(cameras)})")
+    return cameras[name]

@@ -39,7 +39,7 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from gpo.bag import Recording, StampWarning
-from gpo.config import load_rig, rig_to_dict
+from gpo.config import FloorImageSection, read_config, rig_from_config, rig_to_dict
 from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, Keypoints, degenerate, detect, refit
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
 from gpo.fusion import FusionSettings, fuse
@@ -126,29 +126,26 @@ class OdometryConfig:
 
 
 def load_config(path=None) -> OdometryConfig:
-    """The run config of a rig config YAML (``gpo.config``) with the sections ``floor_image``, ``klt``,
-    ``kinematics`` and ``odometry``; None loads the shipped default for the simulated T265 rig."""
+    """The run config of a config YAML (checked by ``gpo.config.read_config``) with the sections ``floor_image``,
+    ``klt``, ``kinematics``, ``odometry``, ``fusion`` and ``features``; None loads the shipped default for the
+    simulated T265 rig. Errors name the file and the key."""
     if path is None:
         with resources.as_file(resources.files("gpo") / "configs" / DEFAULT_CONFIG) as default:
             return load_config(default)
     path = Path(path)
-    document = yaml.safe_load(path.read_text()) or {}
-    rig = load_rig(path)
-    floor_section = document.get("floor_image", {})
-    floor = _floor_image(floor_section, path)
-    route = _route(floor_section, path)
-    klt = _dataclass_section(KLTParameters, document.get("klt", {}), path, "klt")
-    kinematics = document.get("kinematics")
-    model = None
-    if kinematics is not None:
-        model = PaperBicycle(float(kinematics["wheelbase_m"]), float(kinematics["rear_to_reference_m"]))
-    odometry = document.get("odometry", {})
-    fusion = _dataclass_section(FusionSettings, document.get("fusion", {}), path, "fusion")
-    features = _dataclass_section(FeatureParameters, document.get("features", {}), path, "features")
+    document = read_config(path)
+    rig = rig_from_config(document, path)
+    kinematics = document.kinematics
+    model = None if kinematics is None else PaperBicycle(kinematics.wheelbase_m, kinematics.rear_to_reference_m)
+    odometry = document.odometry.model_dump(exclude_none=True)
     try:
-        return OdometryConfig(rig, floor, klt, model, **odometry, fusion=fusion, **route, features=features)
-    except TypeError as error:
-        raise ValueError(f"{path}: odometry: {error}; its keys are method, vector, max_gap_s") from None
+        floor = _floor_image(document.floor_image)
+        return OdometryConfig(
+            rig, floor, document.klt, model, **odometry, fusion=document.fusion, features=document.features,
+            **_route(document.floor_image, path),
+        )
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
 
 
 def config_to_dict(config: OdometryConfig) -> dict:
@@ -181,33 +178,27 @@ def save_config(path, config: OdometryConfig) -> Path:
     return path
 
 
-def _floor_image(section: dict, path: Path) -> FloorImage:
+def _floor_image(section: FloorImageSection) -> FloorImage:
     try:
         return FloorImage.top_view(
-            tuple(section.get("x_range_m", (0.70, 0.90))),
-            tuple(section.get("y_range_m", (-0.10, 0.10))),
-            float(section.get("metres_per_pixel", ODOMETRY_METRES_PER_PIXEL)),
+            section.x_range_m or (0.70, 0.90),
+            section.y_range_m or (-0.10, 0.10),
+            section.metres_per_pixel or ODOMETRY_METRES_PER_PIXEL,
         )
     except ValueError as error:
-        raise ValueError(f"{path}: floor_image: {error}") from None
+        raise ValueError(f"floor_image: {error}") from None
 
 
-def _route(section: dict, path: Path) -> dict:
+def _route(section: FloorImageSection, path: Path) -> dict:
     """The floor image's ``route`` and, for the chessboard routes, ``board_image`` (relative to the config file)
-    and ``board`` (squares, square_m, margin_m, x_m, y_m, yaw_deg: where it lay in base_link)."""
-    route = {"route": section.get("route", "analytic")}
-    if "board_image" in section:
-        route["board_image"] = path.parent / section["board_image"]
-    if "board" in section:
-        board = section["board"]
-        try:
-            chessboard = Chessboard(tuple(board["squares"]), float(board["square_m"]), float(board["margin_m"]))
-            route["board"] = FloorBoard(
-                chessboard, float(board["x_m"]), float(board["y_m"]), math.radians(board["yaw_deg"])
-            )
-        except (KeyError, TypeError) as error:
-            keys = "squares, square_m, margin_m, x_m, y_m, yaw_deg"
-            raise ValueError(f"{path}: floor_image: board: {error!r}; its keys are {keys}") from None
+    and ``board`` (where it lay in base_link)."""
+    route = {"route": section.route}
+    if section.board_image is not None:
+        route["board_image"] = path.parent / section.board_image
+    if section.board is not None:
+        board = section.board
+        chessboard = Chessboard(board.squares, board.square_m, board.margin_m)
+        route["board"] = FloorBoard(chessboard, board.x_m, board.y_m, math.radians(board.yaw_deg))
     return route
 
 
@@ -243,17 +234,6 @@ def floor_table(config: OdometryConfig) -> RemapTable:
     if config.route == "gpi":
         return gpi.resampled(floor, max_outside=0.5)
     return ortho_rectify(gpi, gpi.table.apply(image), config.board, floor, max_outside=0.5).table
-
-
-def _dataclass_section(kind, section: dict, path: Path, name: str):
-    known = {f.name for f in fields(kind)}
-    unknown = sorted(set(section) - known)
-    if unknown:
-        raise ValueError(f"{path}: {name}: unknown keys {', '.join(unknown)}; the keys are {', '.join(sorted(known))}")
-    try:
-        return kind(**section)
-    except ValueError as error:
-        raise ValueError(f"{path}: {name}: {error}") from None
 
 
 # ----------------------------------------------------------------------------------------------- running
