@@ -6,22 +6,40 @@ python -m gpo run BAG ... --write-bag OUT.bag    also a copy of the bag with the
 python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
 python -m gpo table4 [PATH ...]   the first paper's Table 4 (and the second's Table 2 metrics) on long1-3
 python -m gpo recording [NAME ...] [--jobs N]    the cached bags of simulated presets, rendered N at a time if needed
+
+Every command checks its inputs and output paths before it works, never writes onto one of its inputs, and
+writes each file to a temporary name and then renames it; a result it flags (an unreliable calibration, a run
+stopped early or interrupted) does not replace a file already there but goes beside it (``NAME.flagged.EXT``),
+unless ``--force``.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import signal
 import sys
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+import numpy as np
 from matplotlib.figure import Figure
 
 from gpo.bag import POSE_TYPES, Recording, copy_with_trajectory, describe
-from gpo.calibrate import main_calibrate
+from gpo.calibrate import CalibrationError, main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
-from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run, tracking_path
+from gpo.outputs import check_output, destination, write_with
+from gpo.pipeline import (
+    DEFAULT_CONFIG,
+    METHODS,
+    VECTORS,
+    OdometryResult,
+    load_config,
+    run,
+    summary_path_of,
+    tracking_path,
+)
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
 from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording, simulate, write_sample_data
 from gpo.sim.table4 import PATHS as TABLE4_PATHS
@@ -131,8 +149,12 @@ def print_run(result: OdometryResult) -> None:
     print("frames: " + ", ".join(f"{summary[f'frames_{s}']} {s}" for s in ("measured", "coasted", "held", "skipped")))
     for reason, count in summary["flags"].items():
         print(f"  flagged {count}: {reason}")
-    if result.error:
+    if result.interrupted:
+        print(f"interrupted after {len(result.records)} frames; the frames before were kept", file=sys.stderr)
+    elif result.error and result.error.startswith("after"):
         print(f"stopped early {result.error}; the frames before were kept", file=sys.stderr)
+    elif result.error:
+        print(result.error, file=sys.stderr)
 
 
 def read_truth(path: Path, topic: str | None) -> Trajectory:
@@ -152,17 +174,46 @@ def read_truth(path: Path, topic: str | None) -> Trajectory:
 
 
 def read_tum(path: Path) -> Trajectory:
-    """``Trajectory.read_tum``, with the file named in every error."""
+    """``Trajectory.read_tum``, with the file named in every error; a stamp repeated with another pose, or stamps
+    that go backwards, are refused (a pose repeated as it was is read once)."""
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder; expected a TUM file (t tx ty tz qx qy qz qw per line)")
     try:
-        return Trajectory.read_tum(path)
+        trajectory = Trajectory.read_tum(path)
     except ValueError as error:
         if str(path) in str(error):
             raise
         raise ValueError(f"{path}: {error}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{path} is not a text file; expected a TUM file") from None
+    if len(trajectory) == 0:
+        raise ValueError(f"{path} holds no poses; expected a TUM file (t tx ty tz qx qy qz qw per line)")
+    stamps = trajectory.stamps_ns
+    backwards = np.flatnonzero(np.diff(stamps) < 0)
+    if backwards.size:
+        raise ValueError(f"{path}: the stamps go backwards at pose {backwards[0] + 2}; expected them in time order")
+    repeated = np.flatnonzero(np.diff(stamps) == 0) + 1
+    poses = np.hstack([trajectory.positions, trajectory.quaternions])
+    differ = [i for i in repeated if not np.allclose(poses[i], poses[i - 1])]
+    if differ:
+        i = differ[0]
+        apart = np.linalg.norm(trajectory.positions[i] - trajectory.positions[i - 1])
+        raise ValueError(
+            f"{path}: stamp {stamps[i] / 1e9:.9f} s repeats with another pose ({apart:.3f} m away), "
+            f"{len(differ)} time(s); expected one pose per stamp"
+        )
+    if repeated.size:
+        keep = np.delete(np.arange(len(stamps)), repeated)
+        trajectory = Trajectory(
+            stamps[keep], trajectory.positions[keep], trajectory.quaternions[keep], trajectory.frame_id,
+            trajectory.child_frame_id,
+        )
+    return trajectory
 
 
 def save_evaluation_plot(evaluation: Evaluation, out: Path) -> Path:
-    """A figure of both paths (the estimate aligned) and the position error along the truth's distance."""
+    """A figure of both paths (the estimate aligned) and the position error along the truth's distance, written to
+    a temporary name and renamed to ``out`` (its suffix names the format)."""
     fig = Figure(figsize=(12, 4.8))
     paths, errors = fig.subplots(1, 2, width_ratios=(1.2, 1))
     draw_paths(
@@ -172,12 +223,90 @@ def save_evaluation_plot(evaluation: Evaluation, out: Path) -> Path:
     errors.set_xlabel("distance travelled by the truth [m]")
     errors.set_ylabel("position error [mm]")
     errors.set_title(f"APE rmse {evaluation.ape_m.rmse * 1e3:.1f} mm, final {evaluation.final}", fontsize="small")
-    fig.savefig(out, dpi=110, bbox_inches="tight")
-    return out
+    return write_with(out, lambda temporary: fig.savefig(temporary, dpi=110, bbox_inches="tight"))
+
+
+def check_plot(path: Path, inputs: list[Path]) -> Path:
+    """``--plot`` checked before the evaluation: a writable file (``check_output``) of a format matplotlib writes."""
+    formats = Figure().canvas.get_supported_filetypes()
+    if path.suffix.lstrip(".").lower() not in formats:
+        raise ValueError(f"--plot {path}: name a file ending in one of .{', .'.join(sorted(formats))}")
+    return check_output(path, inputs, "--plot")
+
+
+def run_command(args) -> int:
+    """``python -m gpo run``: everything checked, the odometry, then its files (see the module docstring)."""
+    config = load_config(args.config)
+    changes = {k: v for k, v in (("method", args.method), ("vector", args.vector)) if v}
+    config = config.replace(**changes) if changes else config
+    inputs = [args.bag, args.config]
+    check_output(args.out, inputs, "--out")
+    check_output(summary_path_of(args.out), inputs, "--out (its summary)")
+    if args.write_bag:
+        if args.write_bag.exists():
+            raise ValueError(f"--write-bag {args.write_bag} exists; name a new bag (a bag is never replaced)")
+        outputs = [*inputs, args.out, summary_path_of(args.out)]
+        check_output(args.write_bag, outputs, "--write-bag", needed_bytes=_bytes(args.bag))
+    try:
+        result = run(args.bag, config, args.topic)
+    except ValueError as error:
+        raise ValueError(f"{error} (config: {args.config or 'the default, ' + DEFAULT_CONFIG})") from None
+    print_run(result)
+    out = destination(args.out, result.flagged, args.force)
+    if out != args.out:
+        print(f"{args.out} is kept: this result is flagged and goes beside it (--force replaces it)", file=sys.stderr)
+    for path in result.write(out):
+        print(f"wrote {path}")
+    if args.write_bag and not result.flagged:
+        write_with(args.write_bag, lambda temporary: copy_with_trajectory(args.bag, temporary, result.trajectory))
+        print(f"wrote {args.write_bag} (/gpo/odom)")
+    elif args.write_bag:
+        print(f"{args.write_bag} not written: the result is flagged", file=sys.stderr)
+    if result.interrupted:
+        return INTERRUPTED
+    return 1 if result.error else 0
+
+
+def _bytes(path: Path) -> int:
+    """The size of a file, or of every file in a folder, bytes."""
+    if path.is_dir():
+        return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+    return path.stat().st_size if path.is_file() else 0
+
+
+def _positive(text: str) -> float:
+    """An option's number: finite and > 0 (argparse turns the error into a usage error)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
+def _interrupt(signum, frame):
+    """SIGTERM handled as Ctrl-C: a run keeps and writes what it computed."""
+    raise KeyboardInterrupt
+
+
+EXIT_CODES = """exit codes:
+  0    done
+  1    bad input (the error names the file, field or topic), or a result the command flags
+  2    usage: an unknown command or option, or an option's value of the wrong kind
+  130  interrupted (Ctrl-C, SIGTERM): run writes the frames done, marked interrupted
+--debug shows the traceback of an error."""
+INTERRUPTED = 130
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m gpo", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m gpo",
+        description=__doc__.splitlines()[0],
+        epilog=EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an error")
     commands = parser.add_subparsers(dest="command", required=True)
     demo_parser = commands.add_parser("demo", help="write the suite's figures, tables and trajectories into a folder")
     demo_parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default: out)")
@@ -197,9 +326,10 @@ def main(argv: list[str] | None = None) -> int:
     calibrate_parser = commands.add_parser("calibrate", help="calibrate a camera from chessboard images")
     calibrate_parser.add_argument("images", nargs="+", type=Path, help="image files of the board")
     calibrate_parser.add_argument("--board", required=True, help="inner corners per row x per column, e.g. 7x5")
-    calibrate_parser.add_argument("--square", required=True, type=float, help="square size in metres")
+    calibrate_parser.add_argument("--square", required=True, type=_positive, help="square size in metres")
     calibrate_parser.add_argument("--model", default="eucm", choices=("eucm", "pinhole"))
     calibrate_parser.add_argument("--out", type=Path, default=Path("calib.yaml"), help="Kalibr camchain to write")
+    calibrate_parser.add_argument("--force", action="store_true", help="a fit flagged as bad replaces --out too")
     run_parser = commands.add_parser("run", help="odometry of a recording: a TUM trajectory and a summary")
     run_parser.add_argument("bag", type=Path, help="a ROS1 .bag, a ROS2 bag folder, or a .db3/.mcap file")
     run_parser.add_argument("--config", type=Path, help="run config YAML (default: the simulated T265 rig)")
@@ -208,6 +338,7 @@ def main(argv: list[str] | None = None) -> int:
     run_parser.add_argument("--vector", choices=VECTORS, help="motion vector statistic (default: the config's)")
     run_parser.add_argument("--topic", help="image topic (default: the config's, else the bag's only one)")
     run_parser.add_argument("--write-bag", type=Path, help="a copy of the bag with the estimate on /gpo/odom")
+    run_parser.add_argument("--force", action="store_true", help="a flagged result replaces --out too")
     table4_parser = commands.add_parser("table4", help="the first paper's Table 4 on the simulated 15-16 m paths")
     table4_parser.add_argument("paths", nargs="*", metavar="PRESET", help="presets (default: long1 long2 long3)")
     evaluate_parser = commands.add_parser("evaluate", help="errors of a TUM trajectory against the ground truth")
@@ -216,54 +347,72 @@ def main(argv: list[str] | None = None) -> int:
     evaluate_parser.add_argument("--gt-topic", help="the bag's PoseStamped, Odometry or TransformStamped topic")
     alignments = [a.value for a in Alignment]
     evaluate_parser.add_argument("--align", default="origin", choices=alignments, help="(default: origin)")
-    evaluate_parser.add_argument("--delta", type=float, default=RPE_DELTA_M, help="RPE segment length, m (default 1)")
+    evaluate_parser.add_argument(
+        "--delta", type=_positive, default=RPE_DELTA_M, help="RPE segment length, m (default 1)"
+    )
     evaluate_parser.add_argument("--plot", type=Path, help="PNG to write: both paths and the error along the path")
-    args = parser.parse_args(argv)
-
     try:
-        if args.command == "demo":
-            written = demo(args.out)
-            print(f"wrote {len(written)} files to {args.out.resolve()}:")
-            for path in written:
-                print(f"  {path}")
-            print(written[-1].read_text(), end="")
-        elif args.command == "simulate":
-            print(f"{args.preset}: {PRESETS[args.preset].description}")
-            print(f"wrote {simulate(args.preset, args.out, args.format)}")
-        elif args.command == "info":
-            print(describe(args.bag))
-        elif args.command == "recording":
-            for path in recordings(args.names, args.jobs):
-                print(path)
-        elif args.command == "calibrate":
-            result = main_calibrate(args.images, args.board, args.square, args.model, args.out)
-            return 0 if result.ok else 1
-        elif args.command == "run":
-            config = load_config(args.config)
-            changes = {k: v for k, v in (("method", args.method), ("vector", args.vector)) if v}
-            result = run(args.bag, config.replace(**changes) if changes else config, args.topic)
-            print_run(result)
-            for path in result.write(args.out):
-                print(f"wrote {path}")
-            if args.write_bag:
-                print(f"wrote {copy_with_trajectory(args.bag, args.write_bag, result.trajectory)} (/gpo/odom)")
-            return 1 if result.error else 0
-        elif args.command == "evaluate":
-            evaluation = evaluate(
-                read_tum(args.estimate), read_truth(args.truth, args.gt_topic), args.align, args.delta
-            )
-            print(evaluation)
-            if args.plot:
-                print(f"wrote {save_evaluation_plot(evaluation, args.plot)}")
-        elif args.command == "table4":
-            table = reproduce_table4(tuple(args.paths or TABLE4_PATHS))
-            print(table.format(), table.format_table2(), sep="\n\n")
-        elif args.command == "sample-data":
-            for path in write_sample_data(args.out):
-                print(f"wrote {path}")
-    except (ValueError, FileNotFoundError, FileExistsError) as error:
-        print(f"error: {error}", file=sys.stderr)
+        args = parser.parse_args(argv)
+    except SystemExit as exit:  # usage errors (2) and --help (0), returned like every other outcome
+        return exit.code if isinstance(exit.code, int) else 2
+    previous = signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        return _command(args)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return INTERRUPTED
+    except Exception as error:
+        if args.debug:
+            raise
+        known = isinstance(error, ValueError | OSError | CalibrationError)
+        print(f"error: {error}" if known else f"error: {type(error).__name__}: {error}", file=sys.stderr)
+        if not known:
+            print("(--debug shows where it arose)", file=sys.stderr)
         return 1
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _command(args) -> int:
+    """The chosen command; its exit code."""
+    if args.command == "demo":
+        written = demo(args.out)
+        print(f"wrote {len(written)} files to {args.out.resolve()}:")
+        for path in written:
+            print(f"  {path}")
+        print(written[-1].read_text(), end="")
+    elif args.command == "simulate":
+        if args.out.exists():
+            raise ValueError(f"--out {args.out} exists; name a new bag (a bag is never replaced)")
+        check_output(args.out)
+        print(f"{args.preset}: {PRESETS[args.preset].description}")
+        write_with(args.out, lambda temporary: simulate(args.preset, temporary, args.format))
+        print(f"wrote {args.out}")
+    elif args.command == "info":
+        print(describe(args.bag))
+    elif args.command == "recording":
+        for path in recordings(args.names, args.jobs):
+            print(path)
+    elif args.command == "calibrate":
+        check_output(args.out, args.images, "--out")
+        result = main_calibrate(args.images, args.board, args.square, args.model, args.out, args.force)
+        return 0 if result.ok else 1
+    elif args.command == "run":
+        return run_command(args)
+    elif args.command == "evaluate":
+        if args.plot:
+            check_plot(args.plot, [args.estimate, args.truth])
+        estimate, truth = read_tum(args.estimate), read_truth(args.truth, args.gt_topic)
+        evaluation = evaluate(estimate, truth, args.align, args.delta)
+        print(evaluation)
+        if args.plot:
+            print(f"wrote {save_evaluation_plot(evaluation, args.plot)}")
+    elif args.command == "table4":
+        table = reproduce_table4(tuple(args.paths or TABLE4_PATHS))
+        print(table.format(), table.format_table2(), sep="\n\n")
+    elif args.command == "sample-data":
+        for path in write_sample_data(args.out):
+            print(f"wrote {path}")
     return 0
 
 

@@ -50,6 +50,7 @@ from __future__ import annotations
 import difflib
 import logging
 import shutil
+import struct
 import sys
 import warnings
 from collections import Counter
@@ -144,13 +145,15 @@ class Frame:
     """One image: header stamp (ns), the image, the camera frame it was taken in, and its encoding.
 
     ``image`` is (H, W) for mono8/mono16 or (H, W, C) with channels in the order ``encoding``
-    names (rgb8, bgr8, rgba8, bgra8); dtype uint8, or uint16 for mono16.
+    names (rgb8, bgr8, rgba8, bgra8); dtype uint8, or uint16 for mono16. A frame that could not be
+    read (``Recording.frames`` with ``flag_unreadable``) has no image and says why in ``problem``.
     """
 
     stamp_ns: int
-    image: np.ndarray
+    image: np.ndarray | None
     frame_id: str
     encoding: str
+    problem: str | None = None
 
 
 class Recording:
@@ -167,11 +170,9 @@ class Recording:
         try:
             self._reader = AnyReader([source], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
             self._reader.open()
-        except _ROSBAGS_ERRORS as error:
-            raise ValueError(
-                f"{self.path} is not a readable {self.format} recording ({error}). A recording cut short "
-                "(crash, full disk) lacks its index: `rosbag reindex` (ROS1) or `ros2 bag reindex` may repair it."
-            ) from error
+        except (*_ROSBAGS_ERRORS, ValueError, KeyError, IndexError, struct.error) as error:
+            hint = _repair_hint(self.path)
+            raise ValueError(f"{self.path} is not a readable {self.format} recording ({error}).{hint}") from error
         if self._reader.message_count == 0:
             self.close()
             raise ValueError(f"{self.path} holds no messages: expected a recording with at least one")
@@ -224,7 +225,7 @@ class Recording:
         if not candidates:
             raise ValueError(f"{self.path} has no image topic ({' or '.join(IMAGE_TYPES)}); {self._topic_list()}")
         listed = ", ".join(f"{t.name} ({t.msgtype})" for t in candidates)
-        raise ValueError(f"{self.path} has {len(candidates)} image topics: {listed}; pass the one to read as topic=")
+        raise ValueError(f"{self.path} has {len(candidates)} image topics: {listed}; name the one to read (--topic)")
 
     def frames(
         self,
@@ -234,6 +235,7 @@ class Recording:
         *,
         gray: bool = False,
         progress: bool = True,
+        flag_unreadable: bool = False,
     ) -> Iterator[Frame]:
         """Stream the images of ``topic`` (see ``image_topic``) in bag order, one message at a time.
 
@@ -242,17 +244,29 @@ class Recording:
         to mono8 (mono8 and mono16 stay as they are). Header stamps that go backwards or repeat
         issue a ``StampWarning`` (the first of each kind); the frames are still yielded in bag
         order, untouched. A tqdm bar counts the topic's messages unless ``progress`` is False.
-        The topic is checked at the call, each message's encoding when it is read.
+        The topic is checked at the call, each message's encoding when it is read: a message that
+        cannot be read (damaged, a short buffer, a corrupt JPEG) raises ValueError, or with
+        ``flag_unreadable`` is yielded as a Frame without image whose ``problem`` says why (stamped
+        with its log time when even its header cannot be read), and the frames after it follow.
         """
         topic = self.image_topic(topic)
-        return self._frames(topic, self._connections(topic, IMAGE_TYPES), start_ns, end_ns, gray, progress)
+        connections = self._connections(topic, IMAGE_TYPES)
+        return self._frames(topic, connections, start_ns, end_ns, gray, progress, flag_unreadable)
 
-    def _frames(self, topic, connections, start_ns, end_ns, gray, progress) -> Iterator[Frame]:
+    def _frames(self, topic, connections, start_ns, end_ns, gray, progress, flag_unreadable) -> Iterator[Frame]:
         total = sum(c.msgcount for c in connections)
-        messages = tqdm(self._messages(connections), total=total, desc=topic, unit="msg", disable=not progress)
+        raw_messages = self._raw_messages(connections)
+        messages = tqdm(raw_messages, total=total, desc=topic, unit="msg", disable=not progress)
         context = f"{self.path}, topic {topic}"
         previous, warned = None, set()
-        for index, message in enumerate(messages):
+        for index, (connection, log_ns, raw) in enumerate(messages):
+            try:
+                message = self._deserialize(connection, raw)
+            except ValueError as error:
+                if not flag_unreadable:
+                    raise
+                yield Frame(log_ns, None, "", "", problem=f"message {index}: {error}")
+                continue
             stamp = _stamp_ns(message.header)
             if (start_ns is not None and stamp < start_ns) or (end_ns is not None and stamp >= end_ns):
                 continue
@@ -266,7 +280,13 @@ class Recording:
                     stacklevel=2,
                 )
             previous = stamp
-            image, encoding = _decode(message, context)
+            try:
+                image, encoding = _decode(message, context)
+            except ValueError as error:
+                if not flag_unreadable:
+                    raise
+                yield Frame(stamp, None, message.header.frame_id, "", problem=f"message {index}: {error}")
+                continue
             if gray:
                 image, encoding = _to_gray(image, encoding)
             yield Frame(stamp, image, message.header.frame_id, encoding)
@@ -348,10 +368,14 @@ class Recording:
     def _messages(self, connections) -> Iterator[object]:
         """The deserialised messages of ``connections`` in bag order."""
         for connection, _, raw in self._raw_messages(connections):
-            try:
-                yield self._reader.deserialize(raw, connection.msgtype)
-            except AnyReaderError as error:
-                raise ValueError(f"{self.path}: a {connection.msgtype} on {connection.topic} is damaged") from error
+            yield self._deserialize(connection, raw)
+
+    def _deserialize(self, connection, raw: bytes):
+        """One message; ValueError naming the bag and topic when its bytes cannot be read."""
+        try:
+            return self._reader.deserialize(raw, connection.msgtype)
+        except (AnyReaderError, ValueError, IndexError, TypeError) as error:
+            raise ValueError(f"{self.path}: a {connection.msgtype} on {connection.topic} is damaged") from error
 
     def _transforms(self, parent: str, child: str, topic: str) -> tuple[list, str]:
         """The TransformStamped of ``parent`` -> ``child`` on ``topic`` in bag order, and every pair there as text."""
@@ -686,6 +710,19 @@ def _locate(path: Path) -> tuple[str, Path]:
         raise ValueError(f"{path} is not a recording: expected a ROS1 .bag file, a ROS2 bag folder or .db3/.mcap")
     in_folder = path.suffix != ".bag" and (path.parent / "metadata.yaml").is_file()
     return formats[path.suffix], path.parent if in_folder else path
+
+
+def _repair_hint(path: Path) -> str:
+    """How a recording cut short may be repaired, when ``path`` starts as a bag of its format does."""
+    if path.is_dir():
+        return " A ROS2 recording cut short (crash, full disk) may be repaired by `ros2 bag reindex`."
+    with path.open("rb") as file:
+        start = file.read(16)
+    if start.startswith(b"#ROSBAG V2.0"):
+        return " A ROS1 bag cut short (crash, full disk) lacks its index: `rosbag reindex` may repair it."
+    if start.startswith(b"SQLite format 3") or start.startswith(b"\x89MCAP"):
+        return " A ROS2 recording cut short (crash, full disk) may be repaired by `ros2 bag reindex`."
+    return " It does not start as a bag does: not a recording at all, or the wrong file."
 
 
 def _stamp_ns(header) -> int:

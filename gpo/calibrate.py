@@ -86,6 +86,7 @@ from tqdm.auto import tqdm
 
 from gpo.calibfiles import save_kalibr
 from gpo.camera import EUCM, EUCM_PARAMETER_NAMES, Pinhole
+from gpo.outputs import destination, write_with
 from gpo.targets import Chessboard
 
 MODELS = ("eucm", "pinhole")
@@ -802,15 +803,20 @@ def main_calibrate(
     square: float,
     model: str = "eucm",
     out: Path | str = "calib.yaml",
+    force: bool = False,
 ) -> CalibrationResult:
     """``python -m gpo calibrate IMAGES... --board 7x5 --square 0.03 --model eucm --out calib.yaml``.
 
     Calibrates ``model`` from the image files, prints the summary and writes ``out`` as a Kalibr
-    camchain (``cam0``). Kalibr's radtan has no k3, so the pinhole is fitted with k3 = 0 here.
-    The file is written even when the fit is not good; the summary then says so and why, and
-    ``result.ok`` is false (the command should exit non-zero).
+    camchain (``cam0``), through a temporary name. Kalibr's radtan has no k3, so the pinhole is fitted
+    with k3 = 0 here. The file is written even when the fit is not good; the summary then says so and
+    why, ``result.ok`` is false (the command should exit non-zero), and a file already at ``out`` is
+    kept unless ``force``: the fit goes beside it (``gpo.outputs.destination``).
     """
     result = calibrate_images(images, parse_board(board), square, model, progress=True, fix_k3=model == "pinhole")
     print(result.summary())
-    print(f"wrote {save_kalibr(out, {'cam0': result.camera})}")
+    path = destination(out, flagged=not result.ok, force=force)
+    if path != Path(out):
+        print(f"{out} is kept: this fit is not a good calibration (--force replaces it)")
+    print(f"wrote {write_with(path, lambda temporary: save_kalibr(temporary, {'cam0': result.camera}))}")
     return result

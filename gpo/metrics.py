@@ -338,7 +338,10 @@ def evaluate(
     max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
 ) -> Evaluation:
     """``Evaluation`` of ``estimate`` against ``truth``: associated by time, aligned by ``align``, then evo's APE and
-    RPE, the final error and the heading errors. Raises ValueError as ``associate`` and ``align`` do."""
+    RPE, the final error and the heading errors. Raises ValueError as ``associate`` and ``align`` do, and for an
+    RPE segment length ``rpe_delta_m`` that is not a finite number of metres > 0."""
+    if not (np.isfinite(rpe_delta_m) and rpe_delta_m > 0):
+        raise ValueError(f"the RPE segment length must be a finite number of metres > 0, got {rpe_delta_m!r}")
     estimated, reference = associate(estimate, truth, max_difference_s)
     apply_alignment(estimated, reference, align)
     ape = metrics.APE(metrics.PoseRelation.translation_part)

@@ -50,6 +50,7 @@ from gpo.kinematics import (
     increment_from_point_motion,
     increment_from_point_pairs,
 )
+from gpo.outputs import write_text, write_with
 from gpo.rig import Rig
 from gpo.targets import Chessboard, FloorBoard
 from gpo.trajectory import Trajectory, base_from_sensor_odometry
@@ -171,11 +172,9 @@ def config_to_dict(config: OdometryConfig) -> dict:
 
 
 def save_config(path, config: OdometryConfig) -> Path:
-    """Write ``config`` as YAML; return the path."""
-    path = Path(path)
+    """Write ``config`` as YAML (through a temporary name); return the path."""
     header = "# gpo run config: the rig (camera, mount, topics), the floor image, KLT, the bicycle model, the method\n"
-    path.write_text(header + yaml.safe_dump(config_to_dict(config), sort_keys=False, default_flow_style=None))
-    return path
+    return write_text(path, header + yaml.safe_dump(config_to_dict(config), sort_keys=False, default_flow_style=None))
 
 
 def _floor_image(section: FloorImageSection) -> FloorImage:
@@ -240,6 +239,13 @@ def floor_table(config: OdometryConfig) -> RemapTable:
 
 
 @dataclass(frozen=True)
+class Unreadable:
+    """A frame that could not be read, in its image's place: ``reason`` says why (``FloorOdometer.step`` skips it)."""
+
+    reason: str
+
+
+@dataclass(frozen=True)
 class FrameRecord:
     """One frame: header stamp (ns), base_link's ``pose`` (x, y, theta) in odom after it, the flow's counts
     (tracked, kept, inliers, spread in pixels), ``status`` (measured, coasted, held, skipped, first) and the
@@ -279,15 +285,21 @@ class FloorOdometer:
         """The floor image (8-bit) of a grey frame (mono8, or mono16 taken to its upper 8 bits; ``Recording.frames``
         with ``gray=True`` turns colour to grey); for the ``keypoints`` route the 8-bit frame itself. A clear error
         when its size is not the calibration's."""
-        width, height = self.table.source_size
-        if image.shape[:2] != (height, width):
+        if image.shape[:2] != self._frame_shape:
+            height, width = self._frame_shape
             raise ValueError(
-                f"the images are {image.shape[1]} x {image.shape[0]} pixels, the calibration's camera {width} x "
-                f"{height}: wrong topic or wrong calibration"
+                f"the images are {image.shape[1]} x {image.shape[0]} pixels, but the camera of the config's rig "
+                f"'{self.config.rig.name}' is {width} x {height}: wrong --topic, or a config of another camera"
             )
         if image.dtype == np.uint16:
             image = (image >> 8).astype(np.uint8)
         return image if self.config.route == "keypoints" else self.table.apply(image)
+
+    @property
+    def _frame_shape(self) -> tuple[int, int]:
+        """(height, width) of the calibrated camera's frames."""
+        width, height = self.table.source_size
+        return height, width
 
     def keypoints(self, image: np.ndarray) -> Keypoints:
         """The keypoints of a camera frame as the ``features`` method detects them (in the frame itself for the
@@ -298,8 +310,13 @@ class FloorOdometer:
 
     def step(self, stamp_ns: int, image: np.ndarray | Keypoints) -> FrameRecord:
         """Take one camera frame (H, W) in stamp order, or for the ``features`` method its ``keypoints``; return
-        its record."""
+        its record. A frame that cannot be read (``Unreadable``), or after the first one whose size is not the
+        calibration's, is skipped and flagged with the reason."""
         previous = self._stamp_ns
+        if isinstance(image, np.ndarray) and previous is not None and image.shape[:2] != self._frame_shape:
+            image = Unreadable(f"{image.shape[1]} x {image.shape[0]} pixels, not the calibration's")
+        if isinstance(image, Unreadable):
+            return self._record(stamp_ns, None, "skipped", f"unreadable frame: {image.reason}")
         if previous is not None and stamp_ns <= previous:
             problem = "repeats" if stamp_ns == previous else f"is {(previous - stamp_ns) * 1e-9:.3f} s before"
             return self._record(stamp_ns, None, "skipped", f"stamp out of order: {problem} the previous; skipped")
@@ -418,7 +435,8 @@ class FloorOdometer:
 @dataclass
 class OdometryResult:
     """A run's frames and timing: ``records`` (one per frame read), ``seconds`` of wall time, the ``config``,
-    the recording's ``source`` and ``topic``, and ``error``: why the run stopped early, or None."""
+    the recording's ``source`` and ``topic``, ``error``: why the run stopped early or its fusion failed, or None,
+    and whether it was ``interrupted`` (Ctrl-C, SIGTERM) before the end."""
 
     records: list[FrameRecord]
     seconds: float
@@ -427,6 +445,12 @@ class OdometryResult:
     topic: str
     error: str | None = None
     fused: Trajectory | None = None
+    interrupted: bool = False
+
+    @property
+    def flagged(self) -> bool:
+        """Whether the result is short of what was asked: stopped early, interrupted, or not fused."""
+        return self.error is not None or self.interrupted
 
     @property
     def trajectory(self) -> Trajectory:
@@ -449,6 +473,7 @@ class OdometryResult:
         """Plain numbers for people and files: distance, frames by status, flags by reason, speed."""
         statuses = Counter(r.status for r in self.records)
         reasons = Counter(_reason(r.flag) for r in self.records if r.flag)
+        unreadable = [f"{r.stamp_ns}: {r.flag}" for r in self.records if r.flag and r.flag.startswith("unreadable")]
         trajectory = self.trajectory
         return {
             "source": self.source,
@@ -462,15 +487,21 @@ class OdometryResult:
             "duration_s": round(float(np.ptp(trajectory.times)), 3) if len(trajectory) else 0.0,
             "frames_per_second": round(self.frames_per_second, 1),
             "stopped_early": self.error,
+            **({"unreadable": unreadable} if unreadable else {}),
+            **({"interrupted": True} if self.interrupted else {}),
         }
 
     def write(self, tum_path) -> tuple[Path, Path]:
-        """Write the trajectory as TUM and the summary as YAML beside it (``.summary.yaml``); return both paths."""
+        """Write the trajectory as TUM and the summary as YAML beside it (``summary_path``), each through a
+        temporary name (``gpo.outputs``); return both paths."""
         tum_path = Path(tum_path)
-        tum_path.parent.mkdir(parents=True, exist_ok=True)
-        summary_path = tum_path.with_suffix(".summary.yaml")
-        summary_path.write_text(yaml.safe_dump(self.summary(), sort_keys=False))
-        return self.trajectory.write_tum(tum_path), summary_path
+        summary_path = write_text(summary_path_of(tum_path), yaml.safe_dump(self.summary(), sort_keys=False))
+        return write_with(tum_path, self.trajectory.write_tum), summary_path
+
+
+def summary_path_of(tum_path) -> Path:
+    """Where ``OdometryResult.write`` puts the summary of the TUM file ``tum_path``: ``.summary.yaml`` beside it."""
+    return Path(tum_path).with_suffix(".summary.yaml")
 
 
 def _reason(flag: str) -> str:
@@ -480,17 +511,30 @@ def _reason(flag: str) -> str:
 
 def run(bag, config: OdometryConfig | None = None, topic: str | None = None, progress: bool = True) -> OdometryResult:
     """Odometry of the camera frames of ``bag`` (``topic``: default the rig's image topic when the bag has it,
-    else its only image topic). Returns what was computed even when reading stops early: then ``error`` says
-    why (the error is not raised, so that the partial result can be written)."""
+    else its only image topic). The topic, and for ``fused`` the tracking camera's odometry and mount, are checked
+    before the first frame. Returns what was computed even when reading stops early, is interrupted (Ctrl-C) or
+    the fusion fails: then ``error`` or ``interrupted`` say so (nothing is raised, so that the partial result, or
+    the floor odometry alone, can be written). Unreadable frames are skipped and flagged."""
     config = config or load_config()
     with Recording(bag) as recording, warnings.catch_warnings():
         warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
         topic = _choose_topic(recording, topic, config.rig)
+        tracking = tracking_path(recording, config.fusion) if config.method == "fused" else None
         started = time.perf_counter()
-        frames = ((frame.stamp_ns, frame.image) for frame in recording.frames(topic, gray=True, progress=progress))
-        result = odometry(frames, config, str(bag), topic)
-        if config.method == "fused":
-            result.fused = fused_path(recording, result, config.fusion)
+        frames = (
+            (frame.stamp_ns, frame.image if frame.problem is None else Unreadable(frame.problem))
+            for frame in recording.frames(topic, gray=True, progress=progress, flag_unreadable=True)
+        )
+        try:
+            result = odometry(frames, config, str(bag), topic)
+        except ValueError as error:
+            raise ValueError(f"{bag}, topic {topic}: {error}") from None
+        if tracking is not None and not result.interrupted:
+            try:
+                result.fused = fused_path(result, tracking, config.fusion)
+            except ValueError as failure:
+                floor = config.fusion.floor_method
+                result.error = f"the fusion failed ({failure}); the trajectory is the floor odometry ({floor}) alone"
             result.seconds = time.perf_counter() - started
     return result
 
@@ -499,12 +543,13 @@ def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str 
     """Floor odometry of ``frames``: (stamp_ns, image) pairs in stamp order, each image a grey camera frame or, for
     the ``features`` method, its ``FloorOdometer.keypoints``, so that runs differing only in the matching and the
     filters can share one detection. For ``fused`` the floor method's odometry (``run`` adds the filter). Stops at
-    the first frame that cannot be read (an error of reading ``frames``) and says why in ``error``."""
+    the first frame that cannot be read (an error of reading ``frames``) and says why in ``error``, and at Ctrl-C
+    (KeyboardInterrupt), keeping the frames before and marking the result ``interrupted``."""
     fused = config.method == "fused"
     odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
     records: list[FrameRecord] = []
     started = time.perf_counter()
-    error = None
+    error, interrupted = None, False
     try:
         for stamp_ns, image in frames:
             records.append(odometer.step(stamp_ns, image))
@@ -512,7 +557,10 @@ def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str 
         if not records:
             raise
         error = f"after {len(records)} frames: {failure}"
-    return OdometryResult(records, time.perf_counter() - started, config, source, topic, error)
+    except KeyboardInterrupt:
+        interrupted = True
+    seconds = time.perf_counter() - started
+    return OdometryResult(records, seconds, config, source, topic, error, interrupted=interrupted)
 
 
 def tracking_path(recording: Recording, settings: FusionSettings) -> Trajectory:
@@ -524,12 +572,12 @@ def tracking_path(recording: Recording, settings: FusionSettings) -> Trajectory:
     )
 
 
-def fused_path(recording: Recording, result: OdometryResult, settings: FusionSettings) -> Trajectory:
-    """The EKF's path (``gpo.fusion.fuse``) from the floor odometry of ``result`` and the tracking-camera odometry
-    of ``recording`` (an open ``Recording``)."""
+def fused_path(result: OdometryResult, tracking: Trajectory, settings: FusionSettings) -> Trajectory:
+    """The EKF's path (``gpo.fusion.fuse``) from the floor odometry of ``result`` and the tracking camera's path of
+    base_link (``tracking_path``)."""
     kept = [r for r in result.records if r.status != "skipped"]
     inliers = np.array([r.inliers if r.status == "measured" else 0 for r in kept])
-    return fuse(result.floor_trajectory, inliers, tracking_path(recording, settings), settings).trajectory
+    return fuse(result.floor_trajectory, inliers, tracking, settings).trajectory
 
 
 def _choose_topic(recording: Recording, topic: str | None, rig: Rig) -> str:
