@@ -228,10 +228,11 @@ def save_evaluation_plot(evaluation: Evaluation, out: Path) -> Path:
 
 def check_plot(path: Path, inputs: list[Path]) -> Path:
     """``--plot`` checked before the evaluation: a writable file (``check_output``) of a format matplotlib writes."""
+    check_output(path, inputs, "--plot")
     formats = Figure().canvas.get_supported_filetypes()
     if path.suffix.lstrip(".").lower() not in formats:
         raise ValueError(f"--plot {path}: name a file ending in one of .{', .'.join(sorted(formats))}")
-    return check_output(path, inputs, "--plot")
+    return path
 
 
 def run_command(args) -> int:
@@ -384,6 +385,8 @@ def _command(args) -> int:
     elif args.command == "simulate":
         if args.out.exists():
             raise ValueError(f"--out {args.out} exists; name a new bag (a bag is never replaced)")
+        if (args.format == "ros1") != (args.out.suffix == ".bag"):
+            raise ValueError(f"--out {args.out}: a ros1 bag is one file named *.bag, a ros2 bag a folder not so")
         check_output(args.out)
         print(f"{args.preset}: {PRESETS[args.preset].description}")
         write_with(args.out, lambda temporary: simulate(args.preset, temporary, args.format))

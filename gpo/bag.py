@@ -329,10 +329,13 @@ class Recording:
 
     def _first_image_text(self, topic: TopicInfo) -> str:
         """Size and encoding of the first image of ``topic``, e.g. ``848x800 mono8``."""
-        message = self._first_message(topic.name, IMAGE_TYPES)
-        if topic.msgtype == IMAGE:
-            return f"{message.width}x{message.height} {message.encoding}"
-        image, _ = _decode(message, f"{self.path}, topic {topic.name}")
+        try:
+            message = self._first_message(topic.name, IMAGE_TYPES)
+            if topic.msgtype == IMAGE:
+                return f"{message.width}x{message.height} {message.encoding}"
+            image, _ = _decode(message, f"{self.path}, topic {topic.name}")
+        except ValueError:
+            return "unreadable"
         return f"{image.shape[1]}x{image.shape[0]} {message.format}"
 
     def _first_message(self, topic: str, msgtypes: tuple[str, ...]):
@@ -394,7 +397,8 @@ def describe(path) -> str:
     """A summary of the recording at ``path``, as ``python -m gpo info`` prints it.
 
     Path, format, duration, start time, then each topic's type, message count, mean rate over the
-    whole recording, and for image topics the size and encoding of the first message.
+    whole recording, and for image topics the size and encoding of the first message ("unreadable" when it
+    cannot be read).
     """
     with Recording(path) as recording:
         start = datetime.fromtimestamp(recording.start_ns // NS_PER_S, tz=UTC)

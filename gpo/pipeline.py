@@ -559,6 +559,8 @@ def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str 
         error = f"after {len(records)} frames: {failure}"
     except KeyboardInterrupt:
         interrupted = True
+    if records and all(r.flag and r.flag.startswith("unreadable") for r in records):
+        raise ValueError(f"none of the {len(records)} frames could be read; the first: {records[0].flag}")
     seconds = time.perf_counter() - started
     return OdometryResult(records, seconds, config, source, topic, error, interrupted=interrupted)
 

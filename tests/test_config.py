@@ -50,7 +50,7 @@ def test_missing_fields_are_named(tmp_path):
     document = yaml.safe_load(save_rig(tmp_path / "rig.yaml", t265_rig()).read_text())
     del document["mount"]["quaternion_xyzw"]
     (tmp_path / "rig.yaml").write_text(yaml.safe_dump(document))
-    with pytest.raises(ValueError, match="mount.quaternion_xyzw: missing"):
+    with pytest.raises(ValueError, match=r"mount\.quaternion_xyzw: missing"):
         load_rig(tmp_path / "rig.yaml")
     document = yaml.safe_load(save_rig(tmp_path / "rig.yaml", t265_rig()).read_text())
     del document["camera"]

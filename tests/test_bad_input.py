@@ -1,0 +1,845 @@
+"""Bad input never costs data: every command, given what users give it by mistake, exits with the documented code and
+a message that names the problem, shows no traceback, and leaves every input and earlier output as it was.
+
+Each case runs ``python -m gpo`` in-process (``main(argv)``) on small files made here: a 12-frame bag of a camera
+with a quarter of the T265's resolution and its config (``tiny_config``), and variants of both. Every file of the
+case's folders is hashed before and after. The signal cases run a real process.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import cv2
+import numpy as np
+import pytest
+import yaml
+
+import gpo.calibrate
+import gpo.pipeline
+from gpo.__main__ import main
+from gpo.bag import COMPRESSED_IMAGE, IMAGE, BagWriter, Recording
+from gpo.camera import T265_LIKE
+from gpo.trajectory import Trajectory
+
+IMAGE_TOPIC = "/camera/fisheye1/image_raw"
+ODOMETRY_TOPIC = "/camera/odom/sample"
+START_NS = 1_700_000_000 * 10**9
+FRAME_NS = 33_333_333
+SIZE = (200, 212)  # height, width: the tiny camera's
+CONFIG = Path(__file__).parents[1] / "gpo" / "configs" / "sim_t265.yaml"
+
+
+# ------------------------------------------------------------------------------------------------ the files
+
+
+def tiny_config(path: Path, **changes) -> Path:
+    """The shipped T265 config with the camera at a quarter of its resolution and a 4 mm floor image, so that a run
+    takes a fraction of a second; ``changes`` replace top-level sections."""
+    document = yaml.safe_load(CONFIG.read_text())
+    document["camera"]["intrinsics"] = [0.6, 1.1, 71.5, 71.5, 106.0, 100.0]
+    document["camera"]["resolution"] = [SIZE[1], SIZE[0]]
+    document["floor_image"]["metres_per_pixel"] = 0.004
+    document["klt"].update(
+        max_corners=40, min_distance_px=3.0, block_size=3, window_px=7, pyramid_levels=1, redetect_below=15,
+        min_tracks=4, flat_field_px=0,
+    )
+    document.update(changes)
+    path.write_text(yaml.safe_dump(document, sort_keys=False))
+    return path
+
+
+def texture(size=SIZE, seed=0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    noise = (rng.random((size[0] + 40, size[1] + 80)) * 255).astype(np.uint8)
+    return cv2.GaussianBlur(noise, (0, 0), 1.5)
+
+
+def frame(index: int, size=SIZE) -> np.ndarray:
+    """The floor moved one pixel a frame."""
+    return np.ascontiguousarray(texture(size)[20 : 20 + size[0], 20 + index : 20 + index + size[1]])
+
+
+def write_bag(path: Path, frames: int = 12, image=frame, stamps=None, odometry=True, static_tf=True, poses=None):
+    """A ros1 bag: ``frames`` images (``image(i)``: an array, or a callable writing the message itself), the
+    tracking camera's odometry (``poses(i)``: position) and its mount on /tf_static, and a mocap truth."""
+    stamps = stamps or [START_NS + i * FRAME_NS for i in range(frames)]
+    poses = poses or (lambda i: [0.01 * i, 0.0, 0.0])
+    with BagWriter(path) as bag:
+        if static_tf:
+            bag.add_static_transform("base_link", "camera_pose_frame", [0.6, 0, 0.12], [0, 0, 0, 1], START_NS)
+        for i, stamp in enumerate(stamps):
+            picture = image(i)
+            if callable(picture):
+                picture(bag, stamp)
+            else:
+                bag.add_image(IMAGE_TOPIC, stamp, picture, "cam")
+            if odometry:
+                bag.add_odometry(ODOMETRY_TOPIC, stamp, poses(i), [0, 0, 0, 1], "odom", "camera_pose_frame")
+            bag.add_pose("/mocap/base_link", stamp, [0.01 * i, 0.0, 0.0], [0, 0, 0, 1], "world")
+    return path
+
+
+def raw_image(encoding="mono8", data=None, size=SIZE):
+    """A sensor_msgs/Image written as given (another encoding, a short buffer)."""
+
+    def write(bag: BagWriter, stamp: int):
+        pixels = frame(0, size)
+        message = bag._types[IMAGE](
+            header=bag._header(IMAGE_TOPIC, stamp, "cam"), height=size[0], width=size[1], encoding=encoding,
+            is_bigendian=0, step=size[1], data=pixels.reshape(-1) if data is None else data,
+        )
+        bag._write(IMAGE_TOPIC, message, stamp)
+
+    return write
+
+
+def stamped(index: int, header_ns: int):
+    """Frame ``index`` whose header stamp is ``header_ns``, whatever its log time."""
+
+    def write(bag: BagWriter, stamp: int):
+        pixels = frame(index)
+        message = bag._types[IMAGE](
+            header=bag._header(IMAGE_TOPIC, header_ns, "cam"), height=SIZE[0], width=SIZE[1], encoding="mono8",
+            is_bigendian=0, step=SIZE[1], data=pixels.reshape(-1),
+        )
+        bag._write(IMAGE_TOPIC, message, stamp)
+
+    return write
+
+
+def jpeg(index: int, corrupt: bool = False):
+    def write(bag: BagWriter, stamp: int):
+        if not corrupt:
+            bag.add_compressed_image(IMAGE_TOPIC, stamp, frame(index), "cam", format="jpeg")
+            return
+        data = np.frombuffer(b"\xff\xd8\xff\xe0 not a jpeg at all", np.uint8)
+        message = bag._types[COMPRESSED_IMAGE](
+            header=bag._header(IMAGE_TOPIC, stamp, "cam"), format="mono8; jpeg compressed mono8", data=data
+        )
+        bag._write(IMAGE_TOPIC, message, stamp)
+
+    return write
+
+
+def stamps(*offsets_frames) -> list[int]:
+    return [START_NS + round(k * FRAME_NS) for k in offsets_frames]
+
+
+BAGS = {
+    "good": {},
+    "other_size": {"image": lambda i: frame(i, (100, 106))},
+    "other_encoding": {"image": lambda i: raw_image("32FC1")},
+    "corrupt_jpeg": {"image": lambda i: jpeg(i, corrupt=i == 5)},
+    "corrupt_first_jpeg": {"image": lambda i: jpeg(i, corrupt=i == 0)},
+    "short_buffer": {"image": lambda i: raw_image(data=np.zeros(100, np.uint8)) if i == 4 else frame(i)},
+    "mixed_size": {"image": lambda i: frame(i, (100, 106)) if i == 6 else frame(i)},
+    "duplicated": {"stamps": stamps(0, 1, 2, 3, 3, 4, 5, 6, 7, 8, 9, 10)},
+    "out_of_order": {"image": lambda i: stamped(i, START_NS + round(3.5 * FRAME_NS)) if i == 5 else frame(i)},
+    "gappy": {"stamps": stamps(0, 1, 2, 3, 4, 5, 60, 61, 62, 63, 64, 65)},
+    "textureless": {"image": lambda i: np.full(SIZE, 128, np.uint8)},
+    "black": {"image": lambda i: np.zeros(SIZE, np.uint8)},
+    "no_odometry": {"odometry": False},
+    "no_tf_static": {"static_tf": False},
+    "nan_odometry": {"poses": lambda i: [np.nan if i == 3 else 0.01 * i, 0.0, 0.0]},
+    "jumping_odometry": {"poses": lambda i: [0.01 * i + (5.0 if i == 6 else 0.0), 0.0, 0.0]},
+}
+
+
+def board_image(size=(240, 320), corners=(7, 5), square=24, shift=(0, 0), seed=0) -> np.ndarray:
+    """A chessboard of ``corners`` inner corners, slightly turned, on white."""
+    rows, columns = corners[1] + 1, corners[0] + 1
+    board = np.kron((np.indices((rows, columns)).sum(axis=0) % 2) * 255, np.ones((square, square))).astype(np.uint8)
+    board = cv2.copyMakeBorder(board, square, square, square, square, cv2.BORDER_CONSTANT, value=255)
+    turn = cv2.getRotationMatrix2D((board.shape[1] / 2, board.shape[0] / 2), 5 + 4 * seed, 0.9)
+    turn[:, 2] += np.array(shift) + (np.array(size[::-1]) - board.shape[1::-1]) / 2
+    return cv2.warpAffine(board, turn, size[::-1], borderValue=255)
+
+
+class World:
+    """The shared inputs of the cases, made on first use."""
+
+    def __init__(self, root: Path):
+        self.root = root
+        self.config = tiny_config(root / "rig.yaml")
+        self._bags: dict[str, Path] = {}
+
+    def bag(self, name: str = "good") -> Path:
+        if name not in self._bags:
+            self._bags[name] = write_bag(self.root / f"{name}.bag", **BAGS[name])
+        return self._bags[name]
+
+    def tum(self, name: str, lines: list[str]) -> Path:
+        path = self.root / name
+        path.write_text("".join(f"{line}\n" for line in lines))
+        return path
+
+    def truth(self) -> Path:
+        return self.tum("truth.tum", [f"{1 + 0.1 * i:.1f} {0.1 * i:.3f} 0 0 0 0 0 1" for i in range(30)])
+
+
+@pytest.fixture(scope="module")
+def world(tmp_path_factory) -> World:
+    return World(tmp_path_factory.mktemp("world"))
+
+
+def _hashes(*folders: Path) -> dict[Path, str]:
+    return {
+        path: hashlib.sha256(path.read_bytes()).hexdigest()
+        for folder in folders
+        for path in folder.rglob("*")
+        if path.is_file()
+    }
+
+
+def check(capsys, folders, argv, code: int, *words: str, changed=()) -> tuple[str, str]:
+    """Run ``argv``; assert the exit ``code``, every word in the output, no traceback, no temporary file left, and
+    that every file that was in ``folders`` is as it was (but ``changed``); return (stdout, stderr)."""
+    before = _hashes(*folders)
+    got = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    after = _hashes(*folders)
+    assert got == code, f"exit {got}, expected {code}\n{out}\n{err}"
+    for word in words:
+        assert word in out + err, f"{word!r} not in:\n{out}{err}"
+    assert "Traceback" not in err
+    assert not [path for path in after if ".partial" in path.name]
+    for path, digest in before.items():
+        if path not in changed:
+            assert after.get(path) == digest, f"{path} changed or vanished"
+    return out, err
+
+
+def summary(path: Path) -> dict:
+    return yaml.safe_load(path.with_suffix(".summary.yaml").read_text())
+
+
+# --------------------------------------------------------------------------------------------------------- info
+
+
+@pytest.mark.parametrize(
+    ("content", "name", "words"),
+    [
+        (None, "missing.bag", ["no recording at"]),
+        (b"", "empty.bag", ["not a readable ros1 recording", "empty", "does not start as a bag"]),
+        (b"hello, I am text\n", "text.bag", ["not a readable ros1 recording", "does not start as a bag"]),
+        (b"hello", "notes.txt", ["is not a recording", "expected a ROS1 .bag"]),
+        (bytes(range(256)) * 64, "noise.bag", ["not a readable ros1 recording"]),
+        ("folder", "folder", ["without metadata.yaml"]),
+    ],
+)
+def test_info_refuses_what_is_not_a_bag(world, tmp_path, capsys, content, name, words):
+    path = tmp_path / name
+    if content == "folder":
+        path.mkdir()
+    elif content is not None:
+        path.write_bytes(content)
+    check(capsys, [tmp_path], ["info", path], 1, *words)
+
+
+def test_info_names_a_bag_cut_short_and_how_it_may_be_repaired(world, tmp_path, capsys):
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(world.bag().read_bytes()[:5000])
+    check(capsys, [tmp_path], ["info", cut], 1, "not a readable ros1 recording", "rosbag reindex")
+
+
+def test_info_of_a_bag_whose_first_image_is_unreadable(world, capsys):
+    check(capsys, [world.root], ["info", world.bag("corrupt_first_jpeg")], 0, IMAGE_TOPIC, "unreadable")
+
+
+def test_info_describes_a_good_bag(world, capsys):
+    check(capsys, [world.root], ["info", world.bag()], 0, IMAGE_TOPIC, "212x200 mono8", ODOMETRY_TOPIC)
+
+
+# --------------------------------------------------------------------------------------------------------- run
+
+
+@pytest.mark.parametrize("method", ["gpo", "gpo-exact", "gpo-rigid", "features", "fused"])
+def test_every_method_runs_on_the_tiny_bag(world, tmp_path, capsys, method):
+    out = tmp_path / "traj.tum"
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out,
+                                            "--method", method], 0, f"wrote {out}")
+    assert len(Trajectory.read_tum(out)) == 12 and summary(out)["method"] == method
+
+
+@pytest.mark.parametrize("onto", ["bag", "config"])
+def test_run_never_writes_onto_its_input(world, capsys, onto):
+    target = world.bag() if onto == "bag" else world.config
+    check(capsys, [world.root], ["run", world.bag(), "--config", world.config, "--out", target], 1,
+          "is an input of this command", "would be overwritten")
+
+
+def test_run_refuses_an_input_under_another_name(world, tmp_path, capsys):
+    link = tmp_path / "link.tum"
+    os.link(world.config, link)
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", link], 1,
+          "is an input of this command")
+
+
+def test_run_refuses_a_folder_for_out_before_working(world, tmp_path, capsys):
+    folder = tmp_path / "results"
+    folder.mkdir()
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", folder], 1,
+          "is a folder")
+    assert list(tmp_path.rglob("*.yaml")) == []  # no stray summary
+
+
+def test_run_refuses_a_read_only_folder_before_working(world, tmp_path, capsys, monkeypatch):
+    """The suite may run as root, whom no permission stops: the folder's access is what the check asks."""
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != folder and real(path, mode))
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", folder / "t.tum"], 1,
+          "cannot be written (read-only)")
+
+
+def test_a_full_disk_keeps_the_earlier_output_whole(world, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "traj.tum"
+    out.write_text("# a good trajectory\n")
+
+    def full(self, path):
+        Path(path).write_text("half a tra")
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(Trajectory, "write_tum", full)
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 1,
+          "No space left on device", changed=[out.with_suffix(".summary.yaml")])
+    assert out.read_text() == "# a good trajectory\n"
+
+
+def test_write_bag_needs_room_for_the_copy(world, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("shutil.disk_usage", lambda path: SimpleNamespace(total=10**9, used=10**9, free=1000))
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum",
+                                           "--write-bag", tmp_path / "copy.bag"], 1, "MB free", "needed")
+    assert not (tmp_path / "t.tum").exists()
+
+
+@pytest.mark.parametrize("existing", ["bag", "other"])
+def test_write_bag_never_replaces_a_bag(world, tmp_path, capsys, existing):
+    target = world.bag() if existing == "bag" else world.bag("black")
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum",
+                                           "--write-bag", target], 1, "exists", "never replaced")
+
+
+def test_write_bag_copies_the_bag_with_the_estimate(world, tmp_path, capsys):
+    copy = tmp_path / "copy.bag"
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum",
+                                           "--write-bag", copy], 0, "/gpo/odom")
+    with Recording(copy) as recorded:
+        assert len(recorded.trajectory("/gpo/odom")) == 12
+
+
+@pytest.mark.parametrize(
+    ("arguments", "words"),
+    [
+        (["--topic", "/camera/fisheye1/image"], ["has no topic /camera/fisheye1/image", "did you mean"]),
+        (["--topic", ODOMETRY_TOPIC], ["carries nav_msgs/msg/Odometry", "expected one of"]),
+        (["--method", "fast"], ["invalid choice: 'fast'"]),
+        (["--vector", "mode"], ["invalid choice: 'mode'"]),
+    ],
+)
+def test_run_names_a_bad_option(world, tmp_path, capsys, arguments, words):
+    code = 2 if "invalid choice" in words[0] else 1
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum",
+                                           *arguments], code, *words)
+
+
+def test_run_asks_for_the_topic_of_a_bag_with_two(world, tmp_path, capsys):
+    bag = tmp_path / "two.bag"
+    with BagWriter(bag) as writer:
+        for i in range(3):
+            writer.add_image("/left/image_raw", START_NS + i * FRAME_NS, frame(i), "left")
+            writer.add_image("/right/image_raw", START_NS + i * FRAME_NS, frame(i), "right")
+    check(capsys, [world.root, tmp_path], ["run", bag, "--config", world.config, "--out", tmp_path / "t.tum"], 1,
+          "has 2 image topics", "(--topic)")
+
+
+def test_run_names_bag_topic_and_config_when_the_image_size_is_wrong(world, tmp_path, capsys):
+    bag = world.bag("other_size")
+    check(capsys, [world.root, tmp_path], ["run", bag, "--config", world.config, "--out", tmp_path / "t.tum"], 1,
+          str(bag), IMAGE_TOPIC, "106 x 100 pixels", "212 x 200", str(world.config), "--topic")
+
+
+def test_run_refuses_a_bag_whose_every_frame_is_unreadable(world, tmp_path, capsys):
+    check(capsys, [world.root, tmp_path], ["run", world.bag("other_encoding"), "--config", world.config, "--out",
+                                           tmp_path / "t.tum"], 1, "none of the 12 frames could be read", "32FC1")
+    assert not (tmp_path / "t.tum").exists()
+
+
+@pytest.mark.parametrize(
+    ("name", "flag", "skipped"),
+    [
+        ("corrupt_jpeg", "cannot be decoded", 1),
+        ("short_buffer", "short buffer", 1),
+        ("mixed_size", "106 x 100 pixels, not the calibration's", 1),
+    ],
+)
+def test_an_unreadable_frame_is_skipped_and_flagged_and_the_run_goes_on(world, tmp_path, capsys, name, flag, skipped):
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root, tmp_path], ["run", world.bag(name), "--config", world.config, "--out", out], 0,
+          "flagged 1: unreadable frame")
+    assert summary(out)["frames_skipped"] == skipped and flag in summary(out)["unreadable"][0]
+    assert len(Trajectory.read_tum(out)) == 11  # every readable frame, the ones after it too
+
+
+@pytest.mark.parametrize(
+    ("name", "flag"),
+    [
+        ("duplicated", "stamp out of order"),
+        ("out_of_order", "stamp out of order"),
+        ("gappy", "frame gap"),
+        ("textureless", "no texture"),
+        ("black", "no texture"),
+    ],
+)
+def test_frames_that_cannot_be_measured_are_flagged(world, tmp_path, capsys, name, flag):
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root, tmp_path], ["run", world.bag(name), "--config", world.config, "--out", out], 0,
+          f": {flag}")
+    assert flag in summary(out)["flags"]
+
+
+@pytest.mark.parametrize(
+    ("name", "words"),
+    [
+        ("no_odometry", [f"has no topic {ODOMETRY_TOPIC}"]),
+        ("no_tf_static", ["has no topic /tf_static"]),
+        ("nan_odometry", ["finite"]),
+    ],
+)
+def test_fused_checks_its_second_source_before_the_first_frame(world, tmp_path, capsys, monkeypatch, name, words):
+    monkeypatch.setattr(gpo.pipeline, "odometry", lambda *a, **k: pytest.fail("frames were read"))
+    check(capsys, [world.root, tmp_path], ["run", world.bag(name), "--config", world.config, "--method", "fused",
+                                           "--out", tmp_path / "t.tum"], 1, *words)
+    assert not (tmp_path / "t.tum").exists()
+
+
+def test_fused_with_jumping_poses_still_gives_a_path(world, tmp_path, capsys):
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root, tmp_path], ["run", world.bag("jumping_odometry"), "--config", world.config, "--method",
+                                           "fused", "--out", out], 0, f"wrote {out}")
+    assert np.all(np.isfinite(Trajectory.read_tum(out).positions))
+
+
+def test_a_fusion_that_fails_late_still_writes_the_floor_odometry(world, tmp_path, capsys, monkeypatch):
+    def failing(*args, **kwargs):
+        raise ValueError("the filter diverged")
+
+    monkeypatch.setattr(gpo.pipeline, "fuse", failing)
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--method", "fused", "--out",
+                                           out], 1, "the fusion failed (the filter diverged)", "floor odometry")
+    assert len(Trajectory.read_tum(out)) == 12 and "the fusion failed" in summary(out)["stopped_early"]
+
+
+def _stop_after(count: int, exception: BaseException):
+    real = Recording.frames
+
+    def frames(self, *args, **kwargs):
+        for index, item in enumerate(real(self, *args, **kwargs)):
+            if index == count:
+                raise exception
+            yield item
+
+    return frames
+
+
+def test_a_flagged_run_never_replaces_a_good_trajectory(world, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "t.tum"
+    out.write_text("# a good trajectory\n")
+    monkeypatch.setattr(Recording, "frames", _stop_after(6, ValueError("message 6 is damaged")))
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 1,
+          "stopped early after 6 frames: message 6 is damaged", "is kept", "--force")
+    assert out.read_text() == "# a good trajectory\n"
+    assert len(Trajectory.read_tum(tmp_path / "t.flagged.tum")) == 6
+
+
+def test_force_lets_a_flagged_run_replace_the_file(world, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "t.tum"
+    out.write_text("# a good trajectory\n")
+    monkeypatch.setattr(Recording, "frames", _stop_after(6, ValueError("message 6 is damaged")))
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out, "--force"], 1,
+          f"wrote {out}", changed=[out])
+    assert len(Trajectory.read_tum(out)) == 6
+
+
+def test_ctrl_c_keeps_the_frames_done(world, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "t.tum"
+    monkeypatch.setattr(Recording, "frames", _stop_after(5, KeyboardInterrupt()))
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 130,
+          "interrupted after 5 frames")
+    assert len(Trajectory.read_tum(out)) == 5 and summary(out)["interrupted"] is True
+
+
+SLOW_MAIN = """
+import sys, time
+import gpo.pipeline
+step = gpo.pipeline.FloorOdometer.step
+gpo.pipeline.FloorOdometer.step = lambda self, *args: (time.sleep(0.25), step(self, *args))[1]
+from gpo.__main__ import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_to_the_process_keeps_the_frames_done(world, tmp_path, signum):
+    """A real process, its frames slowed to 4 a second, is sent the signal while it reads them."""
+    out = tmp_path / "t.tum"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])}
+    arguments = ["run", world.bag(), "--config", world.config, "--out", out]
+    command = [sys.executable, "-c", SLOW_MAIN, *map(str, arguments)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True)
+    seen = ""
+    while "| 2/12" not in seen and process.poll() is None:  # the progress bar: frames are being read
+        seen += process.stderr.read(1)
+    process.send_signal(signum)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, seen + err
+    assert "Traceback" not in err and "interrupted after" in err
+    done = summary(out)
+    assert done["interrupted"] is True and 0 < done["frames"] < 12
+    assert len(Trajectory.read_tum(out)) == done["frames"]
+
+
+# ------------------------------------------------------------------------------------------------------ configs
+
+
+def _config(world: World, folder: Path, edit) -> Path:
+    document = yaml.safe_load(world.config.read_text())
+    edit(document)
+    path = folder / "bad.yaml"
+    path.write_text(yaml.safe_dump(document, sort_keys=False))
+    return path
+
+
+def _set(path: str, value):
+    def edit(document):
+        *sections, key = path.split(".")
+        for section in sections:
+            document = document[section]
+        document[key] = value
+
+    return edit
+
+
+def _rename(path: str, new: str):
+    def edit(document):
+        *sections, key = path.split(".")
+        for section in sections:
+            document = document[section]
+        document[new] = document.pop(key)
+
+    return edit
+
+
+def _delete(path: str):
+    def edit(document):
+        *sections, key = path.split(".")
+        for section in sections:
+            document = document[section]
+        del document[key]
+
+    return edit
+
+
+@pytest.mark.parametrize(
+    ("edit", "words"),
+    [
+        (_rename("odometry", "odometery"), ["odometery: unknown key; did you mean odometry?"]),
+        (_rename("klt.max_corners", "max_corner"), ["klt.max_corner: unknown key; did you mean max_corners?"]),
+        (_rename("kinematics.wheelbase_m", "wheelbase"), ["kinematics.wheelbase: unknown key", "wheelbase_m?"]),
+        (_rename("mount.position_m", "position"), ["mount.position_m: missing", "mount.position: unknown key"]),
+        (_rename("fusion.tracking_topic", "tracking_topik"), ["did you mean tracking_topic?"]),
+        (_rename("floor_image.metres_per_pixel", "metre_per_pixel"), ["did you mean metres_per_pixel?"]),
+        (_set("klt.max_corners", "many"), ["klt.max_corners", "valid integer", "'many'"]),
+        (_set("floor_image", [1, 2]), ["floor_image", "dictionary", "[1, 2]"]),
+        (_set("rate_hz", float("nan")), ["rate_hz", "finite number"]),
+        (_set("fusion.accel_mps2", float("inf")), ["fusion.accel_mps2", "finite number"]),
+        (_set("rate_hz", -30.0), ["rate_hz", "greater than 0"]),
+        (_set("klt.window_px", 4), ["klt", "window_px=4"]),
+        (_set("floor_image.metres_per_pixel", 0), ["floor_image.metres_per_pixel", "greater than 0"]),
+        (_set("camera.intrinsics", [0.6, 1.1, "thirty", 71.5, 106.0, 100.0]), ["camera.intrinsics.2", "'thirty'"]),
+        (_set("camera.resolution", [212, 200, 3]), ["camera.resolution", "at most 2 items"]),
+        (_set("camera.camera_model", "fisheye-9000"), ["camera", "unsupported camera model 'fisheye-9000'"]),
+        (_set("mount.quaternion_xyzw", [0, 0, 0, 0]), ["mount.quaternion_xyzw", "all zeros"]),
+        (_set("mount.rpy_deg", [0, 6]), ["mount.rpy_deg.2: missing"]),
+        (_delete("mount"), ["mount: missing"]),
+        (_delete("camera"), ["give either 'camera'", "or 'camchain'"]),
+        (_set("odometry.method", "fastest"), ["unknown method 'fastest'"]),
+        (_set("fusion.floor_method", "magic"), ["fusion.floor_method must be one of"]),
+        (_set("floor_image.route", "scenic"), ["unknown route 'scenic'"]),
+        (_set("features.detector", "surf"), ["features", "detector must be one of"]),
+        (_set("topics", "camera"), ["topics", "dictionary"]),
+        (_set("camchain", "."), ["give either 'camera'"]),
+    ],
+)
+def test_config_errors_name_the_file_and_the_key(world, tmp_path, capsys, edit, words):
+    config = _config(world, tmp_path, edit)
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
+          str(config), *words)
+    assert not (tmp_path / "t.tum").exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("name: [t265\ncamera: }\n", ["line 2", "not valid YAML"]),
+        ("name: t265\n  mount: 1\n", ["line 2", "not valid YAML"]),
+        ("", ["a config is a YAML mapping", "NoneType"]),
+        ("- a list\n- of things\n", ["a config is a YAML mapping", "list"]),
+        (b"\x89PNG\r\n\x1a\n\x00\x00\xff\xfe", ["not a text file"]),
+    ],
+)
+def test_config_files_that_are_not_configs(world, tmp_path, capsys, text, words):
+    config = tmp_path / "bad.yaml"
+    config.write_bytes(text if isinstance(text, bytes) else text.encode())
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
+          str(config), *words)
+
+
+def test_an_alias_bomb_is_refused_at_once(world, tmp_path, capsys):
+    lines = ['a: &a ["lol","lol","lol","lol","lol","lol","lol","lol","lol"]']
+    lines += [f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 9)}]" for i in range(9)]
+    config = tmp_path / "bomb.yaml"
+    config.write_text("\n".join(lines) + "\n")
+    started = time.perf_counter()
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
+          "aliases expand to more than")
+    assert time.perf_counter() - started < 10  # refused before it is built, not after a MemoryError
+
+
+@pytest.mark.parametrize("kind", ["folder", "missing"])
+def test_a_config_that_is_no_file(world, tmp_path, capsys, kind):
+    config = tmp_path / "rig.yaml"
+    if kind == "folder":
+        config.mkdir()
+    words = ["is a folder; expected a YAML file"] if kind == "folder" else ["no file", "expected a YAML file"]
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
+          *words)
+
+
+# ------------------------------------------------------------------------------------------------------ evaluate
+
+
+@pytest.mark.parametrize(
+    ("lines", "words"),
+    [
+        ([f"{100 + i} {i} 0 0 0 0 0 1" for i in range(20)], ["do not overlap"]),
+        (["1.0 0 0 0 0 0 0 1", "what is this", "1.2 0 0 0 0 0 0 1"], [":2: a TUM line has 8 numbers"]),
+        (["1.0 0 0 0 0 0 0 1", "1.1 zero 0 0 0 0 0 1"], [":2: not a number"]),
+        ([f"{1 + 0.1 * i:.1f} nan 0 0 0 0 0 1" for i in range(5)], ["must be finite numbers"]),
+        ([], ["holds no poses"]),
+        (["1.0 0 0 0 0 0 0 1", "1.2 0 0 0 0 0 0 1", "1.1 0 0 0 0 0 0 1"], ["stamps go backwards at pose 2"]),
+    ],
+)
+def test_evaluate_names_what_is_wrong_with_the_estimate(world, tmp_path, capsys, lines, words):
+    estimate = world.tum("estimate.tum", lines)
+    check(capsys, [world.root, tmp_path], ["evaluate", estimate, world.truth()], 1, str(estimate), *words)
+
+
+def test_evaluate_refuses_a_repeated_stamp_with_another_pose(world, tmp_path, capsys):
+    lines = [f"{1 + 0.1 * i:.1f} {0.1 * i:.3f} 0 0 0 0 0 1" for i in range(30)]
+    estimate = world.tum("repeated.tum", [*lines[:10], "1.9 5.9 0 0 0 0 0 1", *lines[10:]])
+    check(capsys, [world.root, tmp_path], ["evaluate", estimate, world.truth()], 1,
+          "stamp 1.900000000 s repeats with another pose (5.000 m away)")
+
+
+def test_evaluate_reads_a_pose_repeated_as_it_was_once(world, tmp_path, capsys):
+    lines = [f"{1 + 0.1 * i:.1f} {0.1 * i:.3f} 0 0 0 0 0 1" for i in range(30)]
+    estimate = world.tum("same.tum", lines[:10] + lines[9:])
+    check(capsys, [world.root, tmp_path], ["evaluate", estimate, world.truth()], 0, "poses associated        30")
+
+
+@pytest.mark.parametrize("delta", ["0", "-1", "nan", "inf", "one"])
+def test_evaluate_refuses_a_bad_delta_as_usage(world, tmp_path, capsys, delta):
+    check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), world.truth(), "--delta", delta], 2,
+          "--delta", repr(delta))
+
+
+@pytest.mark.parametrize("onto", ["estimate", "truth", "folder", "format"])
+def test_evaluate_checks_the_plot_before_working(world, tmp_path, capsys, onto):
+    estimate = world.tum("estimate_ok.tum", [f"{1 + 0.1 * i:.1f} {0.1 * i:.3f} 0 0 0 0 0 1" for i in range(30)])
+    truth = world.truth()
+    plot = {"estimate": estimate, "truth": truth, "folder": tmp_path, "format": tmp_path / "plot.xyz"}[onto]
+    words = {"folder": "is a folder", "format": "name a file ending in one of"}.get(onto, "is an input")
+    out, _ = check(capsys, [world.root, tmp_path], ["evaluate", estimate, truth, "--plot", plot], 1, "--plot", words)
+    assert "alignment" not in out  # nothing evaluated
+
+
+def test_evaluate_plot_on_a_full_disk_leaves_nothing_half_written(world, tmp_path, capsys, monkeypatch):
+    import matplotlib.figure
+
+    def full(self, path, **kwargs):
+        Path(path).write_bytes(b"\x89PNG half")
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", full)
+    plot = tmp_path / "plot.png"
+    plot.write_bytes(b"\x89PNG an earlier plot")
+    check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), world.truth(), "--plot", plot], 1,
+          "No space left on device")
+
+
+@pytest.mark.parametrize(
+    ("arguments", "words"),
+    [
+        (["missing.tum", "truth"], ["missing.tum"]),
+        (["folder", "truth"], ["is a folder; expected a TUM file"]),
+        (["truth", "bag"], ["is a recording: name its ground-truth topic with --gt-topic"]),
+        (["truth", "bag", "--gt-topic", "/mocap/base"], ["has no topic /mocap/base", "did you mean /mocap/base_link"]),
+        (["truth", "truth", "--gt-topic", "/mocap"], ["--gt-topic /mocap names a bag's topic"]),
+    ],
+)
+def test_evaluate_names_a_missing_or_wrong_file(world, tmp_path, capsys, arguments, words):
+    (tmp_path / "folder").mkdir()
+    named = {"truth": world.truth(), "bag": world.bag(), "folder": tmp_path / "folder"}
+    argv = [named.get(a, tmp_path / a if a.endswith(".tum") else a) for a in arguments]
+    check(capsys, [world.root, tmp_path], ["evaluate", *argv], 1, *words)
+
+
+# ----------------------------------------------------------------------------------------------------- calibrate
+
+
+def _images(folder: Path, images: list[np.ndarray]) -> list[Path]:
+    paths = []
+    for index, image in enumerate(images):
+        paths.append(folder / f"view{index}.png")
+        cv2.imwrite(str(paths[-1]), image)
+    return paths
+
+
+@pytest.mark.parametrize(
+    ("views", "board", "words"),
+    [
+        ("two", "7x5", ["only 2 usable view(s)", "at least 3"]),
+        ("blank", "7x5", ["no chessboard of 7x5 inner corners", "found in any of the 3 images"]),
+        ("two", "9x7", ["no chessboard of 9x7 inner corners"]),
+        ("mixed", "7x5", ["calibrate images of one camera at one resolution"]),
+        ("text", "7x5", ["not an image that OpenCV can read"]),
+        ("missing", "7x5", ["no such image file"]),
+        ("two", "7by5", ["expected inner corners per row x per column"]),
+    ],
+)
+def test_calibrate_names_what_is_wrong_with_the_views(tmp_path, capsys, views, board, words):
+    if views == "text":
+        (tmp_path / "view0.png").write_text("not a picture")
+        paths = [tmp_path / "view0.png"]
+    elif views == "missing":
+        paths = [tmp_path / "nowhere.png"]
+    else:
+        images = {
+            "two": [board_image(seed=0), board_image(seed=1, shift=(10, 5))],
+            "blank": [np.full((240, 320), 255, np.uint8) for _ in range(3)],
+            "mixed": [board_image(seed=0), board_image(size=(200, 300), seed=1)],
+        }[views]
+        paths = _images(tmp_path, images)
+    out = tmp_path / "calib.yaml"
+    check(capsys, [tmp_path], ["calibrate", *paths, "--board", board, "--square", "0.03", "--out", out], 1, *words)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("arguments", "code", "words"),
+    [
+        (["--square", "0"], 2, ["--square", "expected a finite number > 0"]),
+        (["--square", "-0.03"], 2, ["--square"]),
+        (["--model", "kb9"], 2, ["invalid choice: 'kb9'"]),
+        (["--out", "view0.png"], 1, ["is an input of this command"]),
+        (["--out", "."], 1, ["is a folder"]),
+    ],
+)
+def test_calibrate_checks_its_options_before_working(tmp_path, capsys, monkeypatch, arguments, code, words):
+    paths = _images(tmp_path, [board_image(seed=0)])
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(gpo.calibrate, "calibrate_images", lambda *a, **k: pytest.fail("calibrated"))
+    options = {"--board": "7x5", "--square": "0.03", **dict(zip(arguments[::2], arguments[1::2], strict=True))}
+    argv = ["calibrate", *paths, *[item for pair in options.items() for item in pair]]
+    check(capsys, [tmp_path], argv, code, *words)
+
+
+def _fit(ok: bool):
+    def calibrate_images(*args, **kwargs):
+        verdict = "good" if ok else "NOT A GOOD CALIBRATION"
+        return SimpleNamespace(ok=ok, camera=T265_LIKE, summary=lambda: f"eucm calibration ({verdict})")
+
+    return calibrate_images
+
+
+def test_a_bad_fit_never_replaces_a_good_calibration(tmp_path, capsys, monkeypatch):
+    paths = _images(tmp_path, [board_image(seed=0)])
+    good = tmp_path / "calib.yaml"
+    good.write_text("cam0: {camera_model: eucm}  # the good one\n")
+    monkeypatch.setattr(gpo.calibrate, "calibrate_images", _fit(ok=False))
+    check(capsys, [tmp_path], ["calibrate", *paths, "--board", "7x5", "--square", "0.03", "--out", good], 1,
+          "NOT A GOOD CALIBRATION", f"{good} is kept", "calib.flagged.yaml")
+    assert "camera_model: eucm" in (tmp_path / "calib.flagged.yaml").read_text()
+
+
+def test_force_and_a_good_fit_replace_the_calibration(tmp_path, capsys, monkeypatch):
+    paths = _images(tmp_path, [board_image(seed=0)])
+    old = tmp_path / "calib.yaml"
+    for ok, extra in ((False, ["--force"]), (True, [])):
+        old.write_text("cam0: {}\n")
+        monkeypatch.setattr(gpo.calibrate, "calibrate_images", _fit(ok=ok))
+        check(capsys, [tmp_path], ["calibrate", *paths, "--board", "7x5", "--square", "0.03", "--out", old, *extra],
+              0 if ok else 1, f"wrote {old}", changed=[old])
+        assert "intrinsics" in old.read_text()
+
+
+# ------------------------------------------------------------------------------------------------------ simulate
+
+
+@pytest.mark.parametrize(
+    ("out", "arguments", "code", "words"),
+    [
+        ("existing.bag", [], 1, ["exists; name a new bag"]),
+        ("folder", ["--format", "ros2"], 1, ["exists; name a new bag"]),
+        ("sim.txt", [], 1, ["a ros1 bag is one file named *.bag"]),
+        ("sim.bag", ["--format", "ros2"], 1, ["a ros2 bag a folder"]),
+        ("sim.bag", ["--format", "ros3"], 2, ["invalid choice: 'ros3'"]),
+    ],
+)
+def test_simulate_checks_its_output_before_rendering(tmp_path, capsys, monkeypatch, out, arguments, code, words):
+    (tmp_path / "existing.bag").write_bytes(b"an earlier bag")
+    (tmp_path / "folder").mkdir()
+    monkeypatch.setattr("gpo.__main__.simulate", lambda *a, **k: pytest.fail("rendered"))
+    check(capsys, [tmp_path], ["simulate", "--preset", "test", "--out", tmp_path / out, *arguments], code, *words)
+
+
+def test_simulate_refuses_an_unknown_preset_as_usage(tmp_path, capsys):
+    check(capsys, [tmp_path], ["simulate", "--preset", "marathon", "--out", tmp_path / "x.bag"], 2,
+          "invalid choice: 'marathon'")
+
+
+# ------------------------------------------------------------------------------------------------ the exit codes
+
+
+def test_the_help_documents_the_exit_codes(capsys):
+    assert main(["--help"]) == 0
+    text = capsys.readouterr().out
+    for line in ("0    done", "1    bad input", "2    usage", "130  interrupted", "--debug"):
+        assert line in text
+
+
+def test_debug_shows_the_traceback(world, tmp_path):
+    config = tmp_path / "rig.yaml"
+    config.mkdir()
+    with pytest.raises(ValueError, match="is a folder"):
+        main(["--debug", "run", str(world.bag()), "--config", str(config), "--out", str(tmp_path / "t.tum")])
+
+
+def test_an_unexpected_error_is_one_line_and_points_to_debug(world, tmp_path, capsys, monkeypatch):
+    def broken(*args, **kwargs):
+        raise MemoryError("out of memory")
+
+    monkeypatch.setattr(gpo.pipeline, "odometry", broken)
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum"],
+          1, "error: MemoryError: out of memory", "--debug")
