@@ -468,7 +468,7 @@ def test_two_image_topics_must_be_told_apart(tmp_path):
     message = str(error.value)
     assert "/camera/fisheye1/image_raw" in message
     assert "/camera/fisheye2/image_raw" in message
-    assert "topic=" in message
+    assert "(--topic)" in message
 
 
 def test_a_misspelled_topic_names_the_close_match_and_every_topic(tmp_path):
