@@ -778,11 +778,17 @@ def _pattern_text(pattern_size: tuple[int, int]) -> str:
 
 
 def _pattern_hint(image: np.ndarray, board: Chessboard, name: str) -> str:
-    """A hint when ``image`` holds a board one inner corner smaller each way: squares counted for corners."""
+    """A hint when ``image`` shows a pattern one inner corner smaller each way: either the squares were counted for
+    the corners, or the board is partly hidden (and that pattern is a part of it, which must not be calibrated)."""
     per_row, per_column = board.pattern_size
     smaller = per_row - 1, per_column - 1
     if min(smaller) >= 3 and _find_in_image(image, smaller) is not None:
-        return f" {name} holds a board of {_pattern_text(smaller)} inner corners: were its squares counted?"
+        given, found = _pattern_text(board.pattern_size), _pattern_text(smaller)
+        return (
+            f" {name} shows a pattern of {found} inner corners: if {given} counted the board's squares, give "
+            f"--board {found}; if {given} is right, the board is partly hidden or cut off in the "
+            "views, and a part of it gives a wrong calibration"
+        )
     return ""
 
 

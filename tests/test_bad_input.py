@@ -722,6 +722,7 @@ def _images(folder: Path, images: list[np.ndarray]) -> list[Path]:
         ("two", "7x5", ["only 2 usable view(s)", "at least 3"]),
         ("blank", "7x5", ["no chessboard of 7x5 inner corners", "found in any of the 3 images"]),
         ("two", "9x7", ["no chessboard of 9x7 inner corners"]),
+        ("two", "8x6", ["shows a pattern of 7x5 inner corners", "--board 7x5", "partly hidden"]),
         ("mixed", "7x5", ["calibrate images of one camera at one resolution"]),
         ("text", "7x5", ["not an image that OpenCV can read"]),
         ("missing", "7x5", ["no such image file"]),

@@ -114,7 +114,7 @@ def test_missing_topic_and_wrong_image_size_are_clear_errors(sample, tmp_path):
     with pytest.raises(ValueError, match="/camera/fisheye1/image_raw"):
         run(bag, topic="/camera/fisheye2/image_raw", progress=False)
     small = [f.image[:400, :424] for f in frames[:3]]
-    with pytest.raises(ValueError, match="424 x 400 pixels, but the camera of the config.s rig .t265. is 848 x 800"):
+    with pytest.raises(ValueError, match=r"424 x 400 pixels, but the camera of the config's rig 't265' is 848 x 800"):
         run(_write(tmp_path / "small.bag", frames[:3], [f.stamp_ns for f in frames[:3]], small), progress=False)
 
 
