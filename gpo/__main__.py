@@ -29,7 +29,7 @@ from gpo.bag import POSE_TYPES, Recording, copy_with_trajectory, describe
 from gpo.calibrate import CalibrationError, main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
-from gpo.outputs import check_output, destination, write_with
+from gpo.outputs import check_output, destination, write_text, write_with
 from gpo.pipeline import (
     DEFAULT_CONFIG,
     METHODS,
@@ -71,7 +71,7 @@ def demo(out: Path) -> list[Path]:
     draw_room_in_image(T265_LIKE, ax=ax, height=0.12)
     ax.set_title("A room seen by a T265-like EUCM fisheye 0.12 m above the floor")
     written.append(out / "fisheye_room_grid.png")
-    fig.savefig(written[-1], dpi=110, bbox_inches="tight")
+    _save(fig, written[-1], dpi=110)
 
     f = T265_LIKE.fx
     cameras = {
@@ -86,10 +86,10 @@ def demo(out: Path) -> list[Path]:
     ax.set_ylim(0, 1200)
     ax.set_title(f"How far from the image centre a ray lands (f = {f:.0f} px); dotted: image edge")
     written.append(out / "projection_curves.png")
-    fig.savefig(written[-1], dpi=110, bbox_inches="tight")
+    _save(fig, written[-1], dpi=110)
 
     written.append(out / "field_of_view.txt")
-    written[-1].write_text("".join(f"{label}: {field_of_view_text(camera)}\n" for label, camera in cameras.items()))
+    write_text(written[-1], "".join(f"{label}: {field_of_view_text(camera)}\n" for label, camera in cameras.items()))
     return written + sample_recording_figures(out) + sample_odometry(out)
 
 
@@ -107,17 +107,17 @@ def sample_recording_figures(out: Path) -> list[Path]:
         ax.set_title(f"{topic}, t = {(frame.stamp_ns - start) * 1e-9:.1f} s")
         ax.axis("off")
     frames_png = out / "sample_frames.png"
-    fig.savefig(frames_png, dpi=90, bbox_inches="tight")
+    _save(fig, frames_png, dpi=90)
 
     fig = Figure(figsize=(7, 5))
     draw_paths({"ground truth": truth, "tracking camera's odometry": tracked}, ax=fig.subplots())
     paths_png = out / "sample_paths.png"
-    fig.savefig(paths_png, dpi=110, bbox_inches="tight")
+    _save(fig, paths_png, dpi=110)
     return [
         frames_png,
         paths_png,
-        truth.write_tum(out / "sample_groundtruth.tum"),
-        tracked.write_tum(out / "sample_tracking_odometry_base.tum"),
+        write_with(out / "sample_groundtruth.tum", truth.write_tum),
+        write_with(out / "sample_tracking_odometry_base.tum", tracked.write_tum),
     ]
 
 
@@ -134,7 +134,7 @@ def sample_odometry(out: Path) -> list[Path]:
         evaluation = evaluate(result.trajectory, truth, "origin")
         written.append(save_evaluation_plot(evaluation, out / f"{name}.png"))
     written.append(out / "sample_fused.evaluation.txt")
-    written[-1].write_text(f"EKF (gpo-exact + tracking camera) on the sample recording\n{evaluation.table()}\n")
+    write_text(written[-1], f"EKF (gpo-exact + tracking camera) on the sample recording\n{evaluation.table()}\n")
     return written
 
 
@@ -223,7 +223,12 @@ def save_evaluation_plot(evaluation: Evaluation, out: Path) -> Path:
     errors.set_xlabel("distance travelled by the truth [m]")
     errors.set_ylabel("position error [mm]")
     errors.set_title(f"APE rmse {evaluation.ape_m.rmse * 1e3:.1f} mm, final {evaluation.final}", fontsize="small")
-    return write_with(out, lambda temporary: fig.savefig(temporary, dpi=110, bbox_inches="tight"))
+    return _save(fig, out, dpi=110)
+
+
+def _save(fig: Figure, path: Path, dpi: int) -> Path:
+    """``fig`` written to ``path`` through a temporary name of the same suffix (which names the format)."""
+    return write_with(path, lambda temporary: fig.savefig(temporary, dpi=dpi, bbox_inches="tight"))
 
 
 def check_plot(path: Path, inputs: list[Path]) -> Path:
@@ -406,7 +411,10 @@ def _command(args) -> int:
         if args.plot:
             check_plot(args.plot, [args.estimate, args.truth])
         estimate, truth = read_tum(args.estimate), read_truth(args.truth, args.gt_topic)
-        evaluation = evaluate(estimate, truth, args.align, args.delta)
+        try:
+            evaluation = evaluate(estimate, truth, args.align, args.delta)
+        except ValueError as error:
+            raise ValueError(f"{args.estimate} against {args.truth}: {error}") from None
         print(evaluation)
         if args.plot:
             print(f"wrote {save_evaluation_plot(evaluation, args.plot)}")

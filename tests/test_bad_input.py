@@ -261,6 +261,19 @@ def test_info_describes_a_good_bag(world, capsys):
 # --------------------------------------------------------------------------------------------------------- run
 
 
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [(None, ["no recording at"]), (b"plain text\n", ["not a readable ros1 recording", "does not start as a bag"])],
+)
+def test_run_refuses_what_is_not_a_bag_before_anything(world, tmp_path, capsys, content, words):
+    bag = tmp_path / "input.bag"
+    if content is not None:
+        bag.write_bytes(content)
+    check(capsys, [world.root, tmp_path], ["run", bag, "--config", world.config, "--out", tmp_path / "t.tum"], 1,
+          *words)
+    assert not (tmp_path / "t.tum").exists()
+
+
 @pytest.mark.parametrize("method", ["gpo", "gpo-exact", "gpo-rigid", "features", "fused"])
 def test_every_method_runs_on_the_tiny_bag(world, tmp_path, capsys, method):
     out = tmp_path / "traj.tum"
@@ -614,6 +627,16 @@ def test_an_alias_bomb_is_refused_at_once(world, tmp_path, capsys):
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
           "aliases expand to more than")
     assert time.perf_counter() - started < 10  # refused before it is built, not after a MemoryError
+
+
+def test_a_camchain_that_is_a_folder(world, tmp_path, capsys):
+    def edit(document):
+        del document["camera"]
+        document["camchain"] = "."
+
+    config = _config(world, tmp_path, edit)
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
+          str(config), "camchain . is a folder; expected a Kalibr camchain YAML file")
 
 
 @pytest.mark.parametrize("kind", ["folder", "missing"])
