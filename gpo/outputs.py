@@ -73,19 +73,18 @@ def destination(path, flagged: bool, force: bool = False) -> Path:
 
 @contextmanager
 def replacing(path) -> Iterator[Path]:
-    """A temporary name beside ``path`` (same suffix, so writers that go by it still do), renamed onto ``path``
-    when the block ends without error and removed when it fails; the folders above are made as needed."""
+    """A temporary path for ``path``: its own name (writers that go by the suffix, or name a bag folder's files
+    after it, still do) in a hidden folder beside it, renamed onto ``path`` when the block ends without error;
+    the hidden folder is removed either way. The folders above are made as needed."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(f".{path.stem}.{os.getpid()}.partial{path.suffix}")
+    folder = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    folder.mkdir()
     try:
-        yield temporary
-        os.replace(temporary, path)
+        yield folder / path.name
+        os.replace(folder / path.name, path)
     finally:
-        if temporary.is_dir():
-            shutil.rmtree(temporary)
-        else:
-            temporary.unlink(missing_ok=True)
+        shutil.rmtree(folder)
 
 
 def write_with(path, write: Callable[[Path], object]) -> Path:

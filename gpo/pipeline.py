@@ -20,7 +20,9 @@ integrates the pose of ``base_link`` in ``odom`` (the pose at the first frame is
 Every frame gets a ``FrameRecord``. A frame that cannot be measured is flagged with the reason and the robot
 **coasts** across it at the last measured velocity, for at most ``max_gap_s``; beyond that it is held still.
 Frames whose stamp repeats or goes backwards are skipped; a gap longer than ``max_gap_s`` between frames is
-flagged, the pose held across it and tracking restarted after it.
+flagged, the pose held across it and tracking restarted after it. A frame that cannot be read (a corrupt JPEG, a
+short buffer, another size) is skipped and flagged with the reason, and the frames after it are read. ``run``
+returns what it computed when reading stops early, at Ctrl-C, or when the fusion fails (the result says which).
 """
 
 from __future__ import annotations

@@ -67,12 +67,14 @@ def frame(index: int, size=SIZE) -> np.ndarray:
     return np.ascontiguousarray(texture(size)[20 : 20 + size[0], 20 + index : 20 + index + size[1]])
 
 
-def write_bag(path: Path, frames: int = 12, image=frame, stamps=None, odometry=True, static_tf=True, poses=None):
-    """A ros1 bag: ``frames`` images (``image(i)``: an array, or a callable writing the message itself), the
-    tracking camera's odometry (``poses(i)``: position) and its mount on /tf_static, and a mocap truth."""
+def write_bag(
+    path: Path, frames: int = 12, image=frame, stamps=None, odometry=True, static_tf=True, poses=None, fmt="ros1"
+):
+    """A bag of format ``fmt``: ``frames`` images (``image(i)``: an array, or a callable writing the message
+    itself), the tracking camera's odometry (``poses(i)``: position) and its mount on /tf_static, a mocap truth."""
     stamps = stamps or [START_NS + i * FRAME_NS for i in range(frames)]
     poses = poses or (lambda i: [0.01 * i, 0.0, 0.0])
-    with BagWriter(path) as bag:
+    with BagWriter(path, fmt) as bag:
         if static_tf:
             bag.add_static_transform("base_link", "camera_pose_frame", [0.6, 0, 0.12], [0, 0, 0, 1], START_NS)
         for i, stamp in enumerate(stamps):
@@ -210,7 +212,7 @@ def check(capsys, folders, argv, code: int, *words: str, changed=()) -> tuple[st
     for word in words:
         assert word in out + err, f"{word!r} not in:\n{out}{err}"
     assert "Traceback" not in err
-    assert not [path for path in after if ".partial" in path.name]
+    assert not [path for path in after if ".partial" in str(path)]
     for path, digest in before.items():
         if path not in changed:
             assert after.get(path) == digest, f"{path} changed or vanished"
@@ -342,9 +344,11 @@ def test_write_bag_never_replaces_a_bag(world, tmp_path, capsys, existing):
                                            "--write-bag", target], 1, "exists", "never replaced")
 
 
-def test_write_bag_copies_the_bag_with_the_estimate(world, tmp_path, capsys):
-    copy = tmp_path / "copy.bag"
-    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum",
+@pytest.mark.parametrize("fmt", ["ros1", "ros2"])
+def test_write_bag_copies_the_bag_with_the_estimate(world, tmp_path, capsys, fmt):
+    bag = world.bag() if fmt == "ros1" else write_bag(tmp_path / "input", fmt="ros2")
+    copy = tmp_path / ("copy.bag" if fmt == "ros1" else "copy")
+    check(capsys, [world.root, tmp_path], ["run", bag, "--config", world.config, "--out", tmp_path / "t.tum",
                                            "--write-bag", copy], 0, "/gpo/odom")
     with Recording(copy) as recorded:
         assert len(recorded.trajectory("/gpo/odom")) == 12
@@ -484,12 +488,13 @@ def test_force_lets_a_flagged_run_replace_the_file(world, tmp_path, capsys, monk
     assert len(Trajectory.read_tum(out)) == 6
 
 
-def test_ctrl_c_keeps_the_frames_done(world, tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize("done", [0, 5])
+def test_ctrl_c_keeps_the_frames_done(world, tmp_path, capsys, monkeypatch, done):
     out = tmp_path / "t.tum"
-    monkeypatch.setattr(Recording, "frames", _stop_after(5, KeyboardInterrupt()))
+    monkeypatch.setattr(Recording, "frames", _stop_after(done, KeyboardInterrupt()))
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 130,
-          "interrupted after 5 frames")
-    assert len(Trajectory.read_tum(out)) == 5 and summary(out)["interrupted"] is True
+          f"interrupted after {done} frames")
+    assert len(Trajectory.read_tum(out)) == done and summary(out)["interrupted"] is True
 
 
 SLOW_MAIN = """
