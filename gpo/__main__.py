@@ -46,6 +46,13 @@ from gpo.sim.table4 import PATHS as TABLE4_PATHS
 from gpo.sim.table4 import reproduce_table4
 from gpo.trajectory import Trajectory
 
+EXIT_CODES = """exit codes:
+  0    done
+  1    bad input (the error names the file, field or topic), or a result the command flags
+  2    usage: an unknown command or option, or an option's value of the wrong kind
+  130  interrupted (Ctrl-C, SIGTERM): run writes the frames done, marked interrupted
+--debug shows the traceback of an error."""
+INTERRUPTED = 130
 
 def recordings(names: list[str], jobs: int = 1) -> list[Path]:
     """The bags of presets ``names`` (``gpo.sim.record.recording``); with ``jobs`` > 1 those not yet cached are rendered
@@ -260,6 +267,8 @@ def run_command(args) -> int:
     print_run(result)
     out = destination(args.out, result.flagged, args.force)
     if out != args.out:
+        check_output(out, inputs, "--out (beside it)")
+        check_output(summary_path_of(out), inputs, "--out (beside it, its summary)")
         print(f"{args.out} is kept: this result is flagged and goes beside it (--force replaces it)", file=sys.stderr)
     for path in result.write(out):
         print(f"wrote {path}")
@@ -294,15 +303,6 @@ def _positive(text: str) -> float:
 def _interrupt(signum, frame):
     """SIGTERM handled as Ctrl-C: a run keeps and writes what it computed."""
     raise KeyboardInterrupt
-
-
-EXIT_CODES = """exit codes:
-  0    done
-  1    bad input (the error names the file, field or topic), or a result the command flags
-  2    usage: an unknown command or option, or an option's value of the wrong kind
-  130  interrupted (Ctrl-C, SIGTERM): run writes the frames done, marked interrupted
---debug shows the traceback of an error."""
-INTERRUPTED = 130
 
 
 def main(argv: list[str] | None = None) -> int:
