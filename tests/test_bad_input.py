@@ -4,6 +4,9 @@ a message that names the problem, shows no traceback, and leaves every input and
 Each case runs ``python -m gpo`` in-process (``main(argv)``) on small files made here: a 12-frame bag of a camera
 with a quarter of the T265's resolution and its config (``tiny_config``), and variants of both. Every file of the
 case's folders is hashed before and after. The signal cases run a real process.
+
+The file is longer than the project's modules: it is the reliability catalogue of DESIGN.md, case beside case,
+each a few lines on the small bags and configs made at its top, and reads best whole.
 """
 
 from __future__ import annotations
