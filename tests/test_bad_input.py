@@ -16,7 +16,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -631,10 +630,8 @@ def test_an_alias_bomb_is_refused_at_once(world, tmp_path, capsys):
     lines += [f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 9)}]" for i in range(9)]
     config = tmp_path / "bomb.yaml"
     config.write_text("\n".join(lines) + "\n")
-    started = time.perf_counter()
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
-          "aliases expand to more than")
-    assert time.perf_counter() - started < 10  # refused before it is built, not after a MemoryError
+          "aliases expand to more than")  # counted on the YAML's nodes, before a billion strings are built
 
 
 def test_a_camchain_that_is_a_folder(world, tmp_path, capsys):
