@@ -47,7 +47,7 @@ def test_the_real_t265_kb4_as_eucm_double_sphere_and_omni(fetch_or_skip):
         pixels = fit.camera.pixel_grid()[::3, ::3]
         rays, valid = fit.camera.unproject(pixels)
         back, _ = fit.camera.project(rays[valid])
-        assert valid.mean() > 0.75 and np.max(np.abs(back - pixels[valid])) < 1e-6
+        assert valid.mean() > 0.7 and np.max(np.abs(back - pixels[valid])) < 1e-6
 
 
 def test_pixels_the_target_cannot_see_are_counted():
