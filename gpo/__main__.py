@@ -18,7 +18,7 @@ from pathlib import Path
 from matplotlib.figure import Figure
 
 from gpo.bag import POSE_TYPES, Recording, copy_with_trajectory, describe
-from gpo.calibrate import main_calibrate
+from gpo.calibrate import MODELS, main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run, tracking_path
@@ -198,7 +198,7 @@ def main(argv: list[str] | None = None) -> int:
     calibrate_parser.add_argument("images", nargs="+", type=Path, help="image files of the board")
     calibrate_parser.add_argument("--board", required=True, help="inner corners per row x per column, e.g. 7x5")
     calibrate_parser.add_argument("--square", required=True, type=float, help="square size in metres")
-    calibrate_parser.add_argument("--model", default="eucm", choices=("eucm", "pinhole"))
+    calibrate_parser.add_argument("--model", default="eucm", choices=MODELS)
     calibrate_parser.add_argument("--out", type=Path, default=Path("calib.yaml"), help="Kalibr camchain to write")
     run_parser = commands.add_parser("run", help="odometry of a recording: a TUM trajectory and a summary")
     run_parser.add_argument("bag", type=Path, help="a ROS1 .bag, a ROS2 bag folder, or a .db3/.mcap file")

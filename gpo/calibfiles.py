@@ -23,6 +23,10 @@ ROS ``sensor_msgs/CameraInfo``: fx, fy, cx, cy in K (no skew) and ``distortion_m
 ``equidistant`` (k1, k2, k3, k4[, 0], as realsense-ros writes a T265's) as `KB4`; and this project's
 conventions ``eucm`` (alpha, beta) and ``ds`` (xi, alpha).
 
+BoofCV's camera YAML (``load_boofcv``), its unified model ``omnidirectional_universal``: ``pinhole`` (fx, fy,
+cx, cy, width, height, skew), ``mirror_offset`` (xi), ``radial_tangential`` (``radial`` k1, k2; t1, t2 as
+OpenCV's p1, p2), as `Omni`.
+
 Only the models of ``gpo.camera`` are read; any other model is refused with an error that names
 it and the file.
 """
@@ -247,3 +251,24 @@ def camera_info_distortion(camera: Camera) -> tuple[str, list[float]]:
     if isinstance(camera, Pinhole):
         return "plumb_bob", list(camera.dist)
     raise TypeError(f"a {type(camera).__name__} has no camera_info distortion model")
+
+
+def load_boofcv(path) -> Omni:
+    """The camera of a BoofCV calibration YAML of the unified model (``model: omnidirectional_universal``)."""
+    path = Path(path)
+    document = yaml.safe_load(path.read_text())
+    if not isinstance(document, Mapping) or document.get("model") != "omnidirectional_universal":
+        model = document.get("model") if isinstance(document, Mapping) else None
+        raise ValueError(f"{path}: expected a BoofCV 'omnidirectional_universal' calibration, got model {model!r}")
+    pinhole = _field(document, "pinhole", str(path))
+    if float(pinhole.get("skew", 0.0)) != 0.0:
+        raise ValueError(f"{path}: a skew of {pinhole['skew']}; the camera models have none")
+    distortion = _field(document, "radial_tangential", str(path))
+    radial = [float(k) for k in distortion.get("radial") or []]
+    if len(radial) > 2:
+        raise ValueError(f"{path}: {len(radial)} radial coefficients; the omni model holds two (k1, k2)")
+    k1, k2 = (*radial, 0.0, 0.0)[:2]
+    values = [float(_field(pinhole, name, f"{path}, pinhole")) for name in ("fx", "fy", "cx", "cy")]
+    xi = float(_field(document, "mirror_offset", str(path)))
+    tangential = (float(distortion.get("t1", 0.0)), float(distortion.get("t2", 0.0)))
+    return Omni(*values, xi, (k1, k2, *tangential), pinhole["width"], pinhole["height"])
