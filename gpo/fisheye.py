@@ -201,8 +201,8 @@ class DoubleSphere(_Camera):
 
     Parameters: ``fx, fy`` and ``cx, cy`` in pixels, ``xi`` (dimensionless, Basalt keeps it in [-1, 1]),
     ``alpha`` in [0, 1]; ``width, height`` the image size in pixels. With xi = 0 it is `EUCM` with beta = 1.
-    At xi = 0 the parameters are degenerate to first order: scaling f by (1 - e), xi by e and alpha by
-    (2 alpha - 1) e changes no pixel, so a calibration near xi = 0 leaves f, xi and alpha with large
+    At xi = 0 the parameters are degenerate to first order: scaling fx and fy by (1 + e) while adding e to
+    xi and (2 alpha - 1) e to alpha changes no pixel, so a calibration near xi = 0 leaves f, xi and alpha with large
     standard deviations although its pixels are well determined.
     """
 
