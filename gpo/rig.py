@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gpo.camera import EUCM, Pinhole
+from gpo.calibfiles import Camera
 
 # columns: the optical x (right), y (down), z (forward) axes written in a forward-looking body frame
 OPTICAL_IN_BODY = Rotation.from_matrix([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
@@ -76,7 +76,7 @@ class Rig:
     """A camera on a robot: the model, the mount, the frame rate and the names it is recorded under."""
 
     name: str
-    camera: EUCM | Pinhole
+    camera: Camera  # any model of gpo.camera
     mount: CameraMount
     rate_hz: float
     image_topic: str
