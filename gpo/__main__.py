@@ -26,7 +26,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from gpo.bag import POSE_TYPES, Recording, copy_with_trajectory, describe
-from gpo.calibrate import CalibrationError, main_calibrate
+from gpo.calibrate import MODELS, CalibrationError, main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 from gpo.outputs import check_output, destination, write_text, write_with
@@ -333,7 +333,7 @@ def main(argv: list[str] | None = None) -> int:
     calibrate_parser.add_argument("images", nargs="+", type=Path, help="image files of the board")
     calibrate_parser.add_argument("--board", required=True, help="inner corners per row x per column, e.g. 7x5")
     calibrate_parser.add_argument("--square", required=True, type=_positive, help="square size in metres")
-    calibrate_parser.add_argument("--model", default="eucm", choices=("eucm", "pinhole"))
+    calibrate_parser.add_argument("--model", default="eucm", choices=MODELS)
     calibrate_parser.add_argument("--out", type=Path, default=Path("calib.yaml"), help="Kalibr camchain to write")
     calibrate_parser.add_argument("--force", action="store_true", help="a fit flagged as bad replaces --out too")
     run_parser = commands.add_parser("run", help="odometry of a recording: a TUM trajectory and a summary")

@@ -42,7 +42,9 @@ Cameras
 -------
 ``sensor_msgs/msg/CameraInfo`` holds fx, fy, cx, cy in ``K``. Distortion models: ``plumb_bob`` and
 ``rational_polynomial`` give a ``Pinhole`` (D = k1, k2, p1, p2[, k3]; rational_polynomial only when
-its k4, k5, k6 are zero); ``eucm``, this project's convention, gives an ``EUCM`` with D = alpha, beta.
+its k4, k5, k6 are zero); ``equidistant`` a ``KB4`` (D = k1, k2, k3, k4); ``eucm`` and ``ds``, this
+project's conventions, an ``EUCM`` (D = alpha, beta) and a ``DoubleSphere`` (D = xi, alpha), as
+`gpo.calibfiles.camera_from_camera_info` reads them.
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, Qo
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from tqdm.auto import tqdm
 
-from gpo.camera import EUCM, Pinhole
+from gpo.calibfiles import Camera, camera_from_camera_info, camera_info_distortion
 from gpo.trajectory import NS_PER_S, Trajectory
 
 _log = logging.getLogger(__name__)
@@ -323,7 +325,7 @@ class Recording:
         _, _, _, translation, rotation = _pose(transforms[-1])
         return np.array(translation), np.array(rotation)
 
-    def camera_info(self, topic: str) -> EUCM | Pinhole:
+    def camera_info(self, topic: str) -> Camera:
         """The camera of the first sensor_msgs/CameraInfo on ``topic`` (conventions in the module docstring)."""
         return _camera_from_info(self._first_message(topic, (CAMERA_INFO,)), f"{self.path}, topic {topic}")
 
@@ -527,12 +529,9 @@ class BagWriter:
         )
         self._write(topic, message, stamp_ns)
 
-    def add_camera_info(self, topic: str, stamp_ns: int, camera: EUCM | Pinhole, frame_id: str) -> None:
-        """A sensor_msgs/CameraInfo of ``camera``: ``eucm`` with D = (alpha, beta), or ``plumb_bob`` with its dist."""
-        if isinstance(camera, EUCM):
-            model, distortion = "eucm", [camera.alpha, camera.beta]
-        else:
-            model, distortion = "plumb_bob", list(camera.dist)
+    def add_camera_info(self, topic: str, stamp_ns: int, camera: Camera, frame_id: str) -> None:
+        """A sensor_msgs/CameraInfo of ``camera``, its distortion as `gpo.calibfiles.camera_info_distortion` has it."""
+        model, distortion = camera_info_distortion(camera)
         k = [camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0]
         p = [camera.fx, 0.0, camera.cx, 0.0, 0.0, camera.fy, camera.cy, 0.0, 0.0, 0.0, 1.0, 0.0]
         info_type = self._types[CAMERA_INFO]
@@ -808,25 +807,11 @@ def _trajectory(poses: list, context: str) -> Trajectory:
     )
 
 
-def _camera_from_info(message, context: str) -> EUCM | Pinhole:
+def _camera_from_info(message, context: str) -> Camera:
     """The camera of a sensor_msgs/CameraInfo (ROS1 spells its matrices D, K; ROS2 d, k)."""
     k = getattr(message, "k", None)
     k, d = (message.K, message.D) if k is None else (k, message.d)
-    if k[1] != 0.0:
-        raise ValueError(f"{context}: the camera matrix K has a skew of {k[1]}; the camera models have none")
-    fx, fy, cx, cy = (float(k[i]) for i in (0, 4, 2, 5))
-    size = {"width": message.width, "height": message.height}
-    model, d = message.distortion_model, [float(v) for v in d]
-    if model == "eucm" and len(d) == 2:
-        return EUCM(fx, fy, cx, cy, d[0], d[1], **size)
-    if model == "rational_polynomial" and len(d) == 8 and not any(d[5:]):
-        d = d[:5]
-    if model in ("plumb_bob", "rational_polynomial") and len(d) in (0, 4, 5):
-        return Pinhole(fx, fy, cx, cy, d or (0.0,) * 5, **size)
-    raise ValueError(
-        f"{context}: distortion model {model!r} with {len(d)} coefficients is not supported; expected "
-        "plumb_bob (k1, k2, p1, p2[, k3]), rational_polynomial with k4 = k5 = k6 = 0, or eucm (alpha, beta)"
-    )
+    return camera_from_camera_info(message.distortion_model, d, k, message.width, message.height, context)
 
 
 def _check_encoding(image: np.ndarray, encoding: str | None, context: str, colour: str = "rgb") -> str:

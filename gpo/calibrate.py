@@ -1,8 +1,9 @@
 """Intrinsic camera calibration from chessboard views: corner detection, then a least-squares fit.
 
-Two models of ``gpo.camera`` are fitted: the EUCM of a fisheye (the T265 of the first paper) by
-our own least squares, and the pinhole with radial-tangential distortion by OpenCV's
-``calibrateCamera``. Both give the same ``CalibrationResult``.
+Every model of ``gpo.camera`` is fitted (``MODELS``): the fisheye models EUCM (the T265 of the first
+paper), double sphere (ds), Kannala-Brandt (kb4) and Mei's unified model with radtan (omni) by our own
+least squares, and the pinhole with radial-tangential distortion by OpenCV's ``calibrateCamera``. All
+give the same ``CalibrationResult``.
 
 Frames and units
 ----------------
@@ -30,8 +31,8 @@ the image cannot tell such turns apart. Where the colours can tell, corner 0 is 
 black square that touches the board's origin; where they cannot, corner 0 is chosen so that the
 first row points as far to the right of the image as possible. Every view follows this one rule.
 
-The least-squares problem (EUCM)
---------------------------------
+The least-squares problem (EUCM; the other fisheye models alike)
+----------------------------------------------------------------
 Unknowns: the intrinsics theta = (fx, fy, cx, cy, alpha, beta) and, for each view i = 1..V, the
 board's pose as a rotation vector r_i and a position t_i. With X_j the inner corners in the board
 frame (``Chessboard.inner_corners``), x_ij their detected pixels and pi_theta the EUCM projection
@@ -50,6 +51,11 @@ by the chain rule through the board point p_ij = R(r_i) X_j + t_i::
 
 View i's rows touch only theta and (r_i, t_i), so J = [J_theta | blockdiag(J_1, ..., J_V)] is
 sparse: 12 non-zeros per row out of 6 + 6 V columns.
+
+The other fisheye models replace theta by their own parameters (``PARAMETER_NAMES``: ds 6, kb4 8,
+omni 9) and pi_theta by their own projection and ``project_jacobians``; their bounds are those of
+`gpo.camera_fit.parameter_bounds`. They start from the EUCM fit: its poses, and the model fitted to
+the EUCM over the image by `gpo.camera_fit.fit_model`.
 
 The start needs no input: alpha = 0.5, beta = 1 (a stereographic lens), cx, cy at the image
 centre, f such that the image's shorter side spans 180 degrees; each view's pose by PnP on the
@@ -84,12 +90,14 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
-from gpo.calibfiles import save_kalibr
-from gpo.camera import EUCM, EUCM_PARAMETER_NAMES, Pinhole
+from gpo.calibfiles import Camera, save_kalibr
+from gpo.camera import EUCM, Pinhole
+from gpo.camera_fit import MODELS as MODEL_CLASSES
+from gpo.camera_fit import fit_model, parameter_bounds
 from gpo.outputs import destination, write_with
 from gpo.targets import Chessboard
 
-MODELS = ("eucm", "pinhole")
+MODELS = tuple(MODEL_CLASSES)  # eucm, ds, kb4, omni, pinhole
 PINHOLE_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 
 MIN_VIEWS = 3
@@ -250,7 +258,7 @@ class CalibrationResult:
     """
 
     model: str
-    camera: EUCM | Pinhole
+    camera: Camera
     std: dict[str, float]
     rms_px: float
     view_rms_px: dict[int, float]
@@ -271,8 +279,8 @@ class CalibrationResult:
     def params(self) -> dict[str, float]:
         """The fitted parameters by name, in the order of ``std``."""
         camera = self.camera
-        if isinstance(camera, EUCM):
-            return dict(zip(EUCM_PARAMETER_NAMES, camera.params.tolist(), strict=True))
+        if not isinstance(camera, Pinhole):
+            return dict(zip(camera.PARAMETER_NAMES, camera.params.tolist(), strict=True))
         values = (camera.fx, camera.fy, camera.cx, camera.cy, *camera.dist, 0.0)[: len(PINHOLE_PARAMETER_NAMES)]
         return dict(zip(PINHOLE_PARAMETER_NAMES, values, strict=True))
 
@@ -298,7 +306,7 @@ class CalibrationResult:
 class _Fit:
     """One fit of a model to the views ``used``: poses as rotation vectors and positions (V, 3)."""
 
-    camera: EUCM | Pinhole
+    camera: Camera
     std: dict[str, float]
     rotvecs: np.ndarray
     positions: np.ndarray
@@ -356,7 +364,7 @@ def calibrate_views(
         raise CalibrationError("no images given")
     names = list(names) if names is not None else [f"view {index}" for index in range(len(images))]
     height, width = images[0].shape[:2]
-    guess = initial_eucm(width, height) if model == "eucm" else None
+    guess = initial_eucm(width, height) if model != "pinhole" else None
     pattern_text = _pattern_text(board.pattern_size)
     observed, dropped = {}, {}
     for index, image in enumerate(tqdm(images, desc="finding corners", disable=not progress)):
@@ -388,9 +396,15 @@ def calibrate_corners(
     names: Sequence[str] | None = None,
     fix_k3: bool = False,
     max_iterations: int = 100,
+    zero: Sequence[str] = (),
+    prior: CalibrationResult | None = None,
 ) -> CalibrationResult:
     """Calibrate ``model`` from corners already found: one (N, 2) pixel array per view, in the order
-    of ``board.inner_corners()``, or None for a view without the board. ``image_size`` = (width, height)."""
+    of ``board.inner_corners()``, or None for a view without the board. ``image_size`` = (width, height).
+
+    For the fisheye models, ``zero`` names parameters held at 0 (e.g. ``("p1", "p2")``: an omni without
+    tangential distortion) and ``prior``, a calibration of the same views by any model, is the start
+    (which saves the EUCM fit the other models otherwise start from)."""
     _check_model(model)
     names = list(names) if names is not None else [f"view {index}" for index in range(len(corners))]
     count = len(board.inner_corners())
@@ -403,10 +417,12 @@ def calibrate_corners(
         if view.shape != (count, 2):
             raise CalibrationError(f"{names[index]}: corners of shape {view.shape}, expected ({count}, 2)")
         observed[index] = view
-    return _calibrate(observed, dropped, names, board, image_size, model, fix_k3, max_iterations)
+    return _calibrate(observed, dropped, names, board, image_size, model, fix_k3, max_iterations, tuple(zero), prior)
 
 
-def _calibrate(observed, dropped, names, board, image_size, model, fix_k3=False, max_iterations=100):
+def _calibrate(
+    observed, dropped, names, board, image_size, model, fix_k3=False, max_iterations=100, zero=(), prior=None
+):
     scrambled = {index for index, corners in observed.items() if not _is_grid(corners, board.pattern_size)}
     dropped = {**dropped, **dict.fromkeys(scrambled, NOT_A_GRID)}
     observed = {index: corners for index, corners in observed.items() if index not in scrambled}
@@ -417,10 +433,10 @@ def _calibrate(observed, dropped, names, board, image_size, model, fix_k3=False,
             f"(better 15 or more, the board tilted and spread over the whole image){reasons}"
         )
     width, height = image_size
-    if model == "eucm":
-        fit = _eucm_fitter(observed, board, width, height, max_iterations)
-    else:
+    if model == "pinhole":
         fit = _pinhole_fitter(observed, board, width, height, fix_k3, max_iterations)
+    else:
+        fit = _model_fitter(model, observed, board, width, height, max_iterations, zero, prior)
     fitted, used, outliers = _fit_rejecting_outliers(fit, observed, board)
     _check_tilts(fitted)
     return _result(model, fitted, used, observed, {**dropped, **outliers}, names, board)
@@ -455,7 +471,7 @@ def initial_eucm(width: int, height: int, focal: float | None = None) -> EUCM:
     return EUCM(focal, focal, (width - 1) / 2.0, (height - 1) / 2.0, 0.5, 1.0, width, height)
 
 
-def board_pose(camera: EUCM | Pinhole, board: Chessboard, corners: np.ndarray):
+def board_pose(camera: Camera, board: Chessboard, corners: np.ndarray):
     """Board pose (rotation camera <- board, position in metres) from its corners' pixels (N, 2), or None.
 
     The corners are unprojected to rays and turned into a virtual pinhole camera looking at their
@@ -516,28 +532,35 @@ def _initial_eucm_fit(observed: dict[int, np.ndarray], board: Chessboard, width:
     return _Fit(camera, {}, rotvecs, positions, True, "start")
 
 
-class _EUCMProblem:
-    """Residuals and sparse Jacobian of the least squares over x = (theta, r_1, t_1, ..., r_V, t_V)."""
+class _ModelProblem:
+    """Residuals and sparse Jacobian of the least squares over x = (theta, r_1, t_1, ..., r_V, t_V) for the
+    camera model class ``model`` with n = len(model.PARAMETER_NAMES) intrinsics theta."""
 
-    def __init__(self, board: Chessboard, observed: np.ndarray, width: int, height: int):
+    def __init__(self, model: type, board: Chessboard, observed: np.ndarray, width: int, height: int, zero=()):
+        self.model = model
         self.points = board.inner_corners()  # X_j, (N, 3)
         self.observed = observed  # x_ij, (V, N, 2)
         self.width, self.height = width, height
+        # the intrinsics solved for; those named in ``zero`` are held at 0
+        self.free = np.array([i for i, name in enumerate(model.PARAMETER_NAMES) if name not in zero])
+        n = self.intrinsics = len(self.free)
         views, count = observed.shape[:2]
         rows = views * count * 2
-        # each row: the six intrinsics, then its view's six pose columns
-        pose_columns = 6 + 6 * np.arange(views)[:, None] + np.arange(6)
-        columns = np.concatenate([np.broadcast_to(np.arange(6), (views, 6)), pose_columns], axis=1)
-        self.indices = np.broadcast_to(columns[:, None, None, :], (views, count, 2, 12)).ravel()
-        self.indptr = np.arange(0, 12 * rows + 1, 12)
-        self.shape = (rows, 6 + 6 * views)
+        # each row: the n intrinsics, then its view's six pose columns
+        pose_columns = n + 6 * np.arange(views)[:, None] + np.arange(6)
+        columns = np.concatenate([np.broadcast_to(np.arange(n), (views, n)), pose_columns], axis=1)
+        self.indices = np.broadcast_to(columns[:, None, None, :], (views, count, 2, n + 6)).ravel()
+        self.indptr = np.arange(0, (n + 6) * rows + 1, n + 6)
+        self.shape = (rows, n + 6 * views)
 
     def pack(self, fit: _Fit) -> np.ndarray:
-        return np.concatenate([fit.camera.params, np.column_stack([fit.rotvecs, fit.positions]).ravel()])
+        return np.concatenate([fit.camera.params[self.free], np.column_stack([fit.rotvecs, fit.positions]).ravel()])
 
     def unpack(self, x: np.ndarray):
-        camera = EUCM.from_params(x[:6], self.width, self.height)
-        poses = x[6:].reshape(-1, 6)
+        params = np.zeros(len(self.model.PARAMETER_NAMES))
+        params[self.free] = x[: self.intrinsics]
+        camera = self.model.from_params(params, self.width, self.height)
+        poses = x[self.intrinsics :].reshape(-1, 6)
         return camera, poses[:, :3], poses[:, 3:]
 
     def _points_in_camera(self, rotvecs, positions):
@@ -563,24 +586,43 @@ class _EUCMProblem:
     def jacobian(self, x: np.ndarray) -> scipy.sparse.csr_matrix:
         camera, rotvecs, positions = self.unpack(x)
         points, d_points_d_rotvec = self._points_in_camera(rotvecs, positions)
-        d_pixels_d_point, d_pixels_d_theta = camera.project_jacobians(points)  # (V, N, 2, 3), (V, N, 2, 6)
+        d_pixels_d_point, d_pixels_d_theta = camera.project_jacobians(points)  # (V, N, 2, 3), (V, N, 2, n)
         d_pixels_d_rotvec = d_pixels_d_point @ d_points_d_rotvec
-        blocks = np.concatenate([d_pixels_d_theta, d_pixels_d_rotvec, d_pixels_d_point], axis=-1)
+        blocks = np.concatenate([d_pixels_d_theta[..., self.free], d_pixels_d_rotvec, d_pixels_d_point], axis=-1)
         blocks = np.nan_to_num(blocks, nan=0.0)  # a corner outside the valid region: constant residual
         return scipy.sparse.csr_matrix((blocks.ravel(), self.indices, self.indptr), shape=self.shape)
 
 
-def _eucm_fitter(observed, board, width, height, max_iterations) -> Callable[[list[int], _Fit | None], _Fit]:
-    """A function fitting the EUCM to the views ``used``, from a given start or from ``_initial_eucm_fit``."""
+def _model_fitter(
+    model, observed, board, width, height, max_iterations, zero=(), prior: CalibrationResult | None = None
+) -> Callable[[list[int], _Fit | None], _Fit]:
+    """A function fitting the fisheye ``model`` to the views ``used``, from a given start. Without one it
+    starts from ``prior`` (a calibration of any model whose views include ``used``: its camera fitted to
+    ``model``, its poses), else the EUCM from ``_initial_eucm_fit``, and any other model from the EUCM
+    fitted first (see the module docstring). Parameters named in ``zero`` are held at 0."""
+    cls = MODEL_CLASSES[model]
+    unknown = sorted(set(zero) - set(cls.PARAMETER_NAMES))
+    if unknown:
+        raise ValueError(f"{model} has no parameter {', '.join(unknown)}; its are {', '.join(cls.PARAMETER_NAMES)}")
 
     def fit(used: list[int], start: _Fit | None) -> _Fit:
         views = {index: observed[index] for index in used}
-        start = start if start is not None else _initial_eucm_fit(views, board, width, height)
-        problem = _EUCMProblem(board, np.array(list(views.values())), width, height)
+        if start is None and prior is not None and set(used) <= set(prior.board_poses):
+            camera = prior.camera if prior.model == model else fit_model(prior.camera, model).camera
+            poses = [prior.board_poses[index] for index in used]
+            rotvecs = np.array([rotation.as_rotvec() for rotation, _ in poses])
+            start = _Fit(camera, {}, rotvecs, np.array([position for _, position in poses]), True, "prior")
+        elif start is None and model == "eucm":
+            start = _initial_eucm_fit(views, board, width, height)
+        elif start is None:
+            eucm = _model_fitter("eucm", observed, board, width, height, max_iterations)(used, None)
+            camera = fit_model(eucm.camera, model).camera
+            start = _Fit(camera, {}, eucm.rotvecs, eucm.positions, True, "start")
+        problem = _ModelProblem(cls, board, np.array(list(views.values())), width, height, zero)
         lower = np.full(problem.shape[1], -np.inf)
         upper = np.full(problem.shape[1], np.inf)
-        lower[[0, 1, 4, 5]] = 1.0, 1.0, 0.0, 0.0  # fx, fy, alpha, beta
-        upper[4] = 1.0
+        low, high = parameter_bounds(model)
+        lower[: problem.intrinsics], upper[: problem.intrinsics] = low[problem.free], high[problem.free]
         solve = functools.partial(
             least_squares,
             problem.residuals,
@@ -593,10 +635,11 @@ def _eucm_fitter(observed, board, width, height, max_iterations) -> Callable[[li
         plain = solve(problem.pack(start), loss="linear")
         solution = solve(plain.x, loss="huber", f_scale=HUBER_SCALE_PX)
         camera, rotvecs, positions = problem.unpack(solution.x)
-        std = _intrinsics_std(problem.jacobian(solution.x), solution.fun)
+        std = np.zeros(len(cls.PARAMETER_NAMES))  # a parameter held at zero: exactly zero
+        std[problem.free] = _intrinsics_std(problem.jacobian(solution.x), solution.fun, problem.intrinsics)
         return _Fit(
             camera,
-            dict(zip(EUCM_PARAMETER_NAMES, std, strict=True)),
+            dict(zip(cls.PARAMETER_NAMES, std.tolist(), strict=True)),
             rotvecs,
             positions,
             plain.status > 0 and solution.status > 0,
@@ -606,15 +649,18 @@ def _eucm_fitter(observed, board, width, height, max_iterations) -> Callable[[li
     return fit
 
 
-def _intrinsics_std(jacobian: scipy.sparse.csr_matrix, residuals: np.ndarray) -> np.ndarray:
-    """Standard deviations of the six intrinsics: the theta block of s^2 (J^T J)^-1, s^2 = sum e^2 / (m - n)."""
+def _intrinsics_std(jacobian: scipy.sparse.csr_matrix, residuals: np.ndarray, count: int) -> np.ndarray:
+    """Standard deviations of the ``count`` intrinsics: the theta block of s^2 (J^T J)^-1, s^2 = sum e^2 / (m - n)."""
     rows, unknowns = jacobian.shape
     variance = residuals @ residuals / max(rows - unknowns, 1)
     normal = (jacobian.T @ jacobian).toarray()
+    scale = np.sqrt(np.diag(normal))  # inverted with unit diagonal: intrinsics and poses differ by orders of magnitude
+    scale[scale == 0] = 1.0
     try:
-        covariance = variance * np.linalg.inv(normal)[:6, :6]
+        scales = np.outer(scale, scale)
+        covariance = variance * (np.linalg.inv(normal / scales) / scales)[:count, :count]
     except np.linalg.LinAlgError:
-        return np.full(6, np.inf)
+        return np.full(count, np.inf)
     return np.sqrt(np.abs(np.diag(covariance)))
 
 
@@ -726,8 +772,8 @@ def _result(model, fitted: _Fit, used, observed, dropped, names, board: Chessboa
             f"RMS reprojection error {rms:.2f} px > {MAX_RMS_PX:g} px: the {model} model does not explain the "
             f"corners; {hint}, or are corners mis-detected?"
         )
-    if isinstance(camera, EUCM):
-        warnings += _bound_warnings(camera)
+    if not isinstance(camera, Pinhole):
+        warnings += _bound_warnings(model, camera)
     if not all(np.isfinite(list(fitted.std.values()))):
         warnings.append("some parameters are not determined by these views (infinite standard deviation)")
     return CalibrationResult(
@@ -747,15 +793,17 @@ def _result(model, fitted: _Fit, used, observed, dropped, names, board: Chessboa
     )
 
 
-def _bound_warnings(camera: EUCM) -> list[str]:
+def _bound_warnings(model: str, camera) -> list[str]:
+    """A warning for each shape parameter (not fx, fy) that sits at a bound of `parameter_bounds`."""
     warnings = []
-    if camera.alpha < BOUND_TOLERANCE or camera.alpha > 1.0 - BOUND_TOLERANCE:
+    for name, value, low, high in zip(camera.PARAMETER_NAMES, camera.params, *parameter_bounds(model), strict=True):
+        if name in ("fx", "fy") or not (value - low < BOUND_TOLERANCE or high - value < BOUND_TOLERANCE):
+            continue
+        hint = "; alpha = 0 is a pinhole: if the lens is not a fisheye, use model 'pinhole'" if name == "alpha" else ""
         warnings.append(
-            f"alpha = {camera.alpha:.4g} sits at its bound (0 <= alpha <= 1), where the standard deviations do "
-            "not hold; alpha = 0 is a pinhole: if the lens is not a fisheye, use model 'pinhole'"
+            f"{name} = {value:.4g} sits at its bound ({low:g} <= {name} <= {high:g}), where the standard "
+            f"deviations do not hold{hint}"
         )
-    if camera.beta < BOUND_TOLERANCE:
-        warnings.append(f"beta = {camera.beta:.4g} sits at its bound beta > 0")
     return warnings
 
 

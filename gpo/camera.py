@@ -1,5 +1,7 @@
 """Camera models: the extended unified camera model (EUCM), the pinhole camera with OpenCV's
 radial-tangential distortion, and Mei's unified (omnidirectional) model with that same distortion.
+Kannala-Brandt (``KB4``) and the double sphere (``DoubleSphere``) live in `gpo.fisheye` and are
+importable from here as well; `gpo.camera_fit` fits one model to another.
 
 Frames and units
 ----------------
@@ -33,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 EUCM_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "alpha", "beta")
+OMNI_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "xi", "k1", "k2", "p1", "p2")
 
 
 def _as_array(values, width: int, what: str) -> np.ndarray:
@@ -163,6 +166,8 @@ class EUCM(_Camera):
     beta: float
     width: int
     height: int
+
+    PARAMETER_NAMES = EUCM_PARAMETER_NAMES
 
     def __post_init__(self):
         _check_intrinsics(self)
@@ -464,10 +469,61 @@ class Omni(_RadialTangential, _Camera):
             raise ValueError(f"xi must be >= 0, got {self.xi}")
         object.__setattr__(self, "dist", _check_radtan(self.dist, (4,)))
 
+    PARAMETER_NAMES = OMNI_PARAMETER_NAMES
+
+    @classmethod
+    def from_params(cls, params, width: int, height: int) -> Omni:
+        """Build from the parameter vector (fx, fy, cx, cy, xi, k1, k2, p1, p2)."""
+        params = np.asarray(params, dtype=np.float64)
+        if params.shape != (9,):
+            raise ValueError(f"Omni parameters must be ({', '.join(OMNI_PARAMETER_NAMES)}), got shape {params.shape}")
+        return cls(*params[:5].tolist(), tuple(params[5:].tolist()), width, height)
+
+    @property
+    def params(self) -> np.ndarray:
+        """The parameter vector (fx, fy, cx, cy, xi, k1, k2, p1, p2)."""
+        return np.array([self.fx, self.fy, self.cx, self.cy, self.xi, *self.dist])
+
     @property
     def _w(self) -> float:
         """Valid points have s_z > -w on the unit sphere."""
         return self.xi if self.xi <= 1.0 else 1.0 / self.xi
+
+    def project_jacobians(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Jacobians of ``project`` at ``points (..., 3)``: ``d(u, v)/d(x, y, z)`` of shape ``(..., 2, 3)`` and
+        ``d(u, v)/d(fx, fy, cx, cy, xi, k1, k2, p1, p2)`` of shape ``(..., 2, 9)``; NaN where invalid.
+
+        By the chain rule through (mx, my) = (x, y) / (z + xi |p|) and the distortion's own Jacobian.
+        """
+        points = _as_array(points, 3, "points")
+        _, valid = self.project(points)
+        x, y, z = np.moveaxis(points, -1, 0)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            norm = np.sqrt(x * x + y * y + z * z)
+            denominator = z + self.xi * norm
+            mx, my = x / denominator, y / denominator
+            xd, yd, (j_xx, j_xy, j_yy) = self._distort(mx, my)
+            d_den = self.xi * points / norm[..., None]  # d denominator / d p
+            d_den[..., 2] += 1.0
+            d_m = -np.stack([mx, my], axis=-1)[..., :, None] * d_den[..., None, :] / denominator[..., None, None]
+            d_m[..., 0, 0] += 1.0 / denominator
+            d_m[..., 1, 1] += 1.0 / denominator
+            d_m_dxi = -np.stack([mx, my], axis=-1) * (norm / denominator)[..., None]
+            j_distort = np.stack([np.stack([j_xx, j_xy], axis=-1), np.stack([j_xy, j_yy], axis=-1)], axis=-2)
+            focal = np.array([self.fx, self.fy])[:, None]
+            j_point = focal * (j_distort @ d_m)
+            r2 = mx * mx + my * my
+            j_params = np.zeros((*points.shape[:-1], 2, 9))
+            j_params[..., 0, 0] = xd
+            j_params[..., 1, 1] = yd
+            j_params[..., 0, 2] = 1.0
+            j_params[..., 1, 3] = 1.0
+            j_params[..., :, 4] = focal[:, 0] * (j_distort @ d_m_dxi[..., None])[..., 0]
+            j_params[..., 0, 5:] = self.fx * np.stack([mx * r2, mx * r2 * r2, 2.0 * mx * my, r2 + 2.0 * mx * mx], -1)
+            j_params[..., 1, 5:] = self.fy * np.stack([my * r2, my * r2 * r2, r2 + 2.0 * my * my, 2.0 * mx * my], -1)
+        j_point[~valid] = np.nan
+        j_params[~valid] = np.nan
+        return j_point, j_params
 
     def project(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Pixels ``(..., 2)`` and validity mask ``(...)`` of camera-frame points ``(..., 3)``."""
@@ -499,3 +555,12 @@ class Omni(_RadialTangential, _Camera):
 
 T265_LIKE = EUCM(fx=286.0, fy=286.0, cx=424.0, cy=400.0, alpha=0.6, beta=1.1, width=848, height=800)
 """An EUCM like the Intel RealSense T265's fisheye (848 x 800 pixels), the default of the examples."""
+
+
+def __getattr__(name: str):
+    """`gpo.fisheye`'s models (Kannala-Brandt, double sphere) are read from here too: ``from gpo.camera import KB4``."""
+    if name in ("KB4", "DoubleSphere", "KB4_PARAMETER_NAMES", "DS_PARAMETER_NAMES"):
+        from gpo import fisheye
+
+        return getattr(fisheye, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

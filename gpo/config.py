@@ -11,12 +11,11 @@
       resolution: [848, 800]
     # camchain: calib/camchain.yaml  ... or a Kalibr camchain file (relative to this file)
     # camchain_camera: cam0          ... and the camera's name in it (default: the first)
-    mount:                         # the camera's optical frame in base_link
+    mount:                         # the camera's body frame (x forward, y left, z up) in base_link
       position_m: [0.6, 0.0, 0.12]
-      quaternion_xyzw: [...]
-      height_m: 0.12               # for people; position_m and quaternion_xyzw are what is read
-      pitch_deg: 6.0
-      roll_deg: 1.5
+      rpy_deg: [1.5, 6.0, 0.0]     # roll, pitch (positive looks down), yaw; REP-103 fixed axes x, y, z
+      # quaternion_xyzw: [...]     # or the optical frame's orientation (x right, y down, z forward) in base_link;
+                                   # given with rpy_deg, both must describe the same orientation
     rate_hz: 30.0
     frame_id: camera_fisheye1_optical_frame
     topics:
@@ -86,12 +85,12 @@ class CameraSection(Section):
 
 
 class MountSection(Section):
-    """The optical frame in base_link: ``position_m`` (metres) and ``quaternion_xyzw`` are read; ``rpy_deg``
-    (roll, pitch, yaw of the camera's body frame, degrees), ``height_m``, ``pitch_deg`` and ``roll_deg`` are for
-    people and only checked."""
+    """The camera in base_link: ``position_m`` (metres) with ``rpy_deg`` (roll, pitch, yaw of the camera's body
+    frame, degrees) or ``quaternion_xyzw`` (its optical frame), or both if they agree (``_mount``); ``height_m``,
+    ``pitch_deg`` and ``roll_deg`` are for people and only checked."""
 
     position_m: Vector3
-    quaternion_xyzw: tuple[float, float, float, float]
+    quaternion_xyzw: tuple[float, float, float, float] | None = None
     rpy_deg: Vector3 | None = None
     height_m: float | None = None
     pitch_deg: float | None = None
@@ -100,9 +99,18 @@ class MountSection(Section):
     @field_validator("quaternion_xyzw")
     @classmethod
     def _unit_length_possible(cls, value):
-        if np.linalg.norm(value) < 1e-9:
+        if value is not None and np.linalg.norm(value) < 1e-9:
             raise ValueError("a rotation's quaternion cannot be all zeros")
         return value
+
+    @model_validator(mode="after")
+    def _an_orientation(self):
+        if self.rpy_deg is None and self.quaternion_xyzw is None:
+            raise ValueError(
+                "no orientation: give rpy_deg: [roll, pitch, yaw] in degrees (the camera's body frame, x forward, "
+                "y left, z up, in base_link) or quaternion_xyzw (its optical frame)"
+            )
+        return self
 
 
 class TopicsSection(Section):
@@ -261,18 +269,17 @@ def _has_keys(kind) -> bool:
     return isinstance(kind, type) and (is_dataclass(kind) or issubclass(kind, BaseModel))
 
 
+MOUNT_AGREEMENT_DEG = 1e-3  # rpy_deg and quaternion_xyzw given together must agree this closely
+
+
 def rig_to_dict(rig: Rig) -> dict:
     """The YAML document of ``rig`` (camera inline)."""
-    pitch, roll = np.degrees(rig.mount.body_rotation.as_euler("YXZ")[:2])
     return {
         "name": rig.name,
         "camera": camera_to_kalibr(rig.camera, rig.name),
         "mount": {
             "position_m": [float(v) for v in rig.mount.position],
-            "quaternion_xyzw": [float(v) for v in rig.mount.rotation.as_quat()],
-            "height_m": round(rig.mount.height, 6),
-            "pitch_deg": round(float(pitch), 6),
-            "roll_deg": round(float(roll), 6),
+            "rpy_deg": [float(np.degrees(angle)) for angle in rig.mount.body_rpy],
         },
         "rate_hz": float(rig.rate_hz),
         "frame_id": rig.frame_id,
@@ -293,11 +300,10 @@ def load_rig(path) -> Rig:
 
 def rig_from_config(config: ConfigFile, path: Path) -> Rig:
     """The rig of the checked config file ``config``, read from ``path`` (a camchain is relative to it)."""
-    mount = config.mount
     return Rig(
         name=config.name,
         camera=_camera(config, path),
-        mount=CameraMount(np.array(mount.position_m), Rotation.from_quat(mount.quaternion_xyzw)),
+        mount=_mount(config.mount, path),
         rate_hz=config.rate_hz,
         image_topic=config.topics.image,
         info_topic=config.topics.camera_info,
@@ -321,3 +327,27 @@ def _camera(config: ConfigFile, path: Path):
     if name not in cameras:
         raise ValueError(f"{path}: camchain_camera {name!r} is not in {config.camchain} ({', '.join(cameras)})")
     return cameras[name]
+
+
+def _mount(section: MountSection, path: Path) -> CameraMount:
+    """The mount of a config's ``mount`` section: ``position_m`` with ``rpy_deg`` (the body frame) or
+    ``quaternion_xyzw`` (the optical frame); with both, they must agree within ``MOUNT_AGREEMENT_DEG``."""
+    position = np.array(section.position_m)
+    mounts = {}
+    if section.rpy_deg is not None:
+        mounts["rpy_deg"] = CameraMount.from_rpy(position, *np.radians(section.rpy_deg))
+    if section.quaternion_xyzw is not None:
+        mounts["quaternion_xyzw"] = CameraMount(position, Rotation.from_quat(section.quaternion_xyzw))
+    if len(mounts) == 2:
+        given, written = mounts["rpy_deg"], mounts["quaternion_xyzw"]
+        angle = np.degrees((given.rotation.inv() * written.rotation).magnitude())
+        if angle > MOUNT_AGREEMENT_DEG:
+            as_rpy = [
+                "[" + ", ".join(f"{round(np.degrees(angle), 3) + 0.0:.3f}" for angle in mount.body_rpy) + "]"
+                for mount in (given, written)
+            ]
+            raise ValueError(
+                f"{path}: mount rpy_deg and quaternion_xyzw disagree by {angle:.3f} degrees: as [roll, pitch, yaw] of "
+                f"the body frame, rpy_deg is {as_rpy[0]} and quaternion_xyzw is {as_rpy[1]}; give one of them"
+            )
+    return mounts.get("rpy_deg", mounts.get("quaternion_xyzw"))

@@ -1,7 +1,7 @@
 """Real calibration files, images and trajectories from public repositories, fetched on first use.
 
 Every file is a byte-identical copy of a blob in a public GitHub repository at a pinned commit
-(Kalibr, camera-intrinsic-model-rs, Basalt, rpg_trajectory_evaluation), downloaded with pooch from
+(Kalibr, camera-intrinsic-model-rs, Basalt, rpg_trajectory_evaluation, BoofCV-Data), downloaded with pooch from
 ``raw.githubusercontent.com`` and checked against its sha256. The data are never committed to this
 project: each keeps its repository's licence (the LICENSE files are in the registry too) and the
 caveats named in the loaders' docstrings.
@@ -28,11 +28,14 @@ _REPOSITORIES = {
     "camera-intrinsic-model-rs": ("powei-lin/camera-intrinsic-model-rs", "f723eb8316da0858ceecf3db257d7c5992f6aeed"),
     "basalt": ("VladyslavUsenko/basalt", "0f3b2b52c807f70ff4e2973ce253c73329eea7bc"),
     "rpg_trajectory_evaluation": ("uzh-rpg/rpg_trajectory_evaluation", "8c8ceec55c5c5094a6494208cfc5f54afe0bbc4d"),
+    "boofcv-data": ("lessthanoptimal/BoofCV-Data", "cc6d8adf795be2e0c6cc12b42b9ed0c92cab0fcf"),
 }
 
 _KALIBR_EXAMPLE = "kalibr/aslam_cv/aslam_cv_python/example"
 _TUM = "camera-intrinsic-model-rs/data"
 _RPG_RUN = "rpg_trajectory_evaluation/results/euroc_vislam_mono/laptop/vislam_ba/laptop_vislam_ba_V1_02"
+_BOOFCV_FISHEYE = "boofcv-data/example/calibration/fisheye/chessboard"
+_BOOFCV_VIEWS = 26
 
 #: file name -> sha256
 _SHA256 = {
@@ -64,6 +67,35 @@ _SHA256 = {
     f"{_RPG_RUN}/eval_cfg.yaml": "54b314ad55b130f861f6b944d7aa8ab8e1a8f39c724a5af9ad8a6a00d4dfe84a",
     f"{_RPG_RUN}/stamped_ba_estimate0.txt": "18e4016ca37252f025b01a9b79b0626bdd90ead94f66affd992f0faa551464f2",
     f"{_RPG_RUN}/stamped_groundtruth.txt": "5df27c489c31dba45a493ce95a15dfe48f1ed6b490cdaf0b3ff66f1cdd9d4977",
+    "boofcv-data/LICENSE.TXT": "dd22e752ddef5d6a1738fdbda73aeb074a1464269fb166ee99e5e9f4bf2cb7b6",
+    f"{_BOOFCV_FISHEYE}/1.jpg": "ddfbddadf20758a9e323025ab9476e7e77fa7f5dbcd6c06f9146efb1ac4f57bb",
+    f"{_BOOFCV_FISHEYE}/2.jpg": "6ec2dab115fb43acd02f4f85a7f3df56fc1fe247f46479a67e654c1f9a9f6cdf",
+    f"{_BOOFCV_FISHEYE}/3.jpg": "b2039d029b812403b4598691064c342ac1f7012de1f8e9924e412639e84ef72d",
+    f"{_BOOFCV_FISHEYE}/4.jpg": "e4fd46708f31bb891b184d51c70cb438471907cac2fbabce2f687b449fd1fc90",
+    f"{_BOOFCV_FISHEYE}/5.jpg": "1e031a07255a7d31de47e4a49fcf15a98bc9bf562a5febe3cdbc8c9eabf7291e",
+    f"{_BOOFCV_FISHEYE}/6.jpg": "84e8e74d5a6a4dfa16b6571a8f18b1b0a4bd9892f5b87ed5d28b11c5a7406ee8",
+    f"{_BOOFCV_FISHEYE}/7.jpg": "8cb2d46c62b33bc3a1d1002123570869a4a9e5f8f6d3fc917b2650fe31acee93",
+    f"{_BOOFCV_FISHEYE}/8.jpg": "c6a38bf3a30c73ace80e1d8171a151124cbc03523b9b3429f1267d5228d06fca",
+    f"{_BOOFCV_FISHEYE}/9.jpg": "858154368363658d6f2d6c4471c2fc51911ac5669082d8a705c9aa171115fe75",
+    f"{_BOOFCV_FISHEYE}/10.jpg": "c9594d74d9d86cd1a7b53aa2c8bf075c90fb90453a8d81c28060b7a6850d2540",
+    f"{_BOOFCV_FISHEYE}/11.jpg": "06b9d1aa1ca776eb20df894e10c1152d133e81397f068d6172fcceb4a56de4c3",
+    f"{_BOOFCV_FISHEYE}/12.jpg": "90724aadfc95a7495366640dfd81dcd9abbc2c81c3cd3bf6d500ce75c5ef654f",
+    f"{_BOOFCV_FISHEYE}/13.jpg": "179854d7f747a7403cddba51ef0a5be7dcd5a58ceab4adcfe8768d9debeb5046",
+    f"{_BOOFCV_FISHEYE}/14.jpg": "584046abbc840eb82fbd2f86678c80b3e0f37d5cd6bd29b2c2a67d5224bf67a3",
+    f"{_BOOFCV_FISHEYE}/15.jpg": "bb37b812b7cb171003f9f8b0d4da4961535c18b40b130b49afddea69469fd25e",
+    f"{_BOOFCV_FISHEYE}/16.jpg": "63550494114a13049885c1e63fe56bd53022fb1884e569d865fd8d30fe0fad37",
+    f"{_BOOFCV_FISHEYE}/17.jpg": "0471fe12edc020b047d1d5fdc136d4358e3f1b6f24e4236eea168195c89f2570",
+    f"{_BOOFCV_FISHEYE}/18.jpg": "60699797ed22f4fceb7741c1058a2b038409575c69c5f654b721b66f94587a94",
+    f"{_BOOFCV_FISHEYE}/19.jpg": "919d2d548547bffc8e11f66aaca8fe65b6cb28626c14cb907d5c1d30e55b1bf9",
+    f"{_BOOFCV_FISHEYE}/20.jpg": "8b675514b19e7676f6cbb1f7f0f0740385b9e93c560568e110608ca1a318f24c",
+    f"{_BOOFCV_FISHEYE}/21.jpg": "5acfca6a1feee1c7cb061f2dac69e9658ba6299713e64836a2ad4333b1fcfb98",
+    f"{_BOOFCV_FISHEYE}/22.jpg": "286973dbf2360bb80f8660f063c059929bf54c723a1c26b44a552bcc7b77d547",
+    f"{_BOOFCV_FISHEYE}/23.jpg": "5f279045c94c866954f388c0f2d9a1a48350f05cdf961069bc0e37dc49354fbd",
+    f"{_BOOFCV_FISHEYE}/24.jpg": "d96db5fab235655609b38b813166dfa82085edfd69f595ad3394a4692112564b",
+    f"{_BOOFCV_FISHEYE}/25.jpg": "4ae51e8317923154412dd3099908158cdcc5846d37677e2c9076cb5b0ba9fbbe",
+    f"{_BOOFCV_FISHEYE}/26.jpg": "9d5dfecf5e05e9331d395efee4e9d70c55ceb78b5b86b80f4e5521b9ecfd68ca",
+    f"{_BOOFCV_FISHEYE}/calibration_target.yaml": "178a03f1a9868f634ef5f4604ed8105e3f5eab936e32bf3670e7adbfa4725c03",
+    f"{_BOOFCV_FISHEYE}/fisheye.yaml": "ade9f737bd2d263f022e7c5e67e0cb648b7d24dd4e4f453accdd26577cc33fc7",
 }
 
 _TIMEOUT_S = 30
@@ -190,3 +222,15 @@ def rpg_trajectories() -> dict[str, Path]:
         "groundtruth": fetch(f"{_RPG_RUN}/stamped_groundtruth.txt"),
         "eval_cfg": fetch(f"{_RPG_RUN}/eval_cfg.yaml"),
     }
+
+
+def boofcv_fisheye_chessboard() -> tuple[list[Path], Path]:
+    """26 real fisheye views of a chessboard and BoofCV's own calibration of them: (image paths, ``fisheye.yaml``).
+
+    640 x 720 colour JPEGs of a board of 7 x 5 squares, i.e. 6 x 4 inner corners (the square size is not
+    published: lengths come out in squares). ``fisheye.yaml`` holds BoofCV's unified (Mei) model with two
+    radial and two tangential coefficients (``omnidirectional_universal``); read it with
+    `gpo.calibfiles.load_boofcv`. From lessthanoptimal/BoofCV-Data, CC BY 4.0, (c) Peter Abeles: attribute BoofCV.
+    """
+    images = [fetch(f"{_BOOFCV_FISHEYE}/{index}.jpg") for index in range(1, _BOOFCV_VIEWS + 1)]
+    return images, fetch(f"{_BOOFCV_FISHEYE}/fisheye.yaml")

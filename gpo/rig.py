@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gpo.camera import EUCM, Pinhole
+from gpo.calibfiles import Camera
 
 # columns: the optical x (right), y (down), z (forward) axes written in a forward-looking body frame
 OPTICAL_IN_BODY = Rotation.from_matrix([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
@@ -46,6 +46,20 @@ class CameraMount:
         down = Rotation.from_matrix([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
         return cls(np.array([x, y, height], dtype=float), Rotation.from_euler("xy", [tilt_x, tilt_y]) * down)
 
+    @classmethod
+    def from_rpy(cls, position, roll: float, pitch: float, yaw: float) -> CameraMount:
+        """A camera whose body frame (x forward, y left, z up) sits at ``position`` (3,) metres in ``base_link``,
+        turned by ``roll``, ``pitch`` and ``yaw`` (radians, REP-103: fixed axes x, y, z, i.e. R = Rz(yaw) Ry(pitch)
+        Rx(roll)); positive pitch looks down, positive roll lifts the camera's left side."""
+        body = Rotation.from_euler("ZYX", [yaw, pitch, roll])
+        return cls(np.asarray(position, dtype=float), body * OPTICAL_IN_BODY)
+
+    @property
+    def body_rpy(self) -> tuple[float, float, float]:
+        """(roll, pitch, yaw) of the camera's body frame in ``base_link``, radians, as ``from_rpy`` takes them."""
+        yaw, pitch, roll = self.body_rotation.as_euler("ZYX")
+        return float(roll), float(pitch), float(yaw)
+
     @property
     def height(self) -> float:
         """Height of the optical centre above the floor, metres."""
@@ -62,7 +76,7 @@ class Rig:
     """A camera on a robot: the model, the mount, the frame rate and the names it is recorded under."""
 
     name: str
-    camera: EUCM | Pinhole
+    camera: Camera  # any model of gpo.camera
     mount: CameraMount
     rate_hz: float
     image_topic: str

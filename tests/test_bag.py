@@ -20,7 +20,7 @@ from rosbags.typesys import Stores, get_typestore
 from scipy.spatial.transform import Rotation
 
 from gpo.bag import BagWriter, Recording, StampWarning, copy_with_trajectory, describe
-from gpo.camera import T265_LIKE, Pinhole
+from gpo.camera import KB4, T265_LIKE, DoubleSphere, Pinhole
 from gpo.trajectory import Trajectory
 
 FORMATS = ("ros1", "ros2", "ros2-mcap")
@@ -388,8 +388,10 @@ def test_tf_static_is_latched(tmp_path, bag_format):
         T265_LIKE,
         Pinhole(fx=600.0, fy=601.0, cx=376.0, cy=240.0, dist=(-0.28, 0.09, 1e-3, -8e-4), width=752, height=480),
         Pinhole(fx=600.0, fy=601.0, cx=376.5, cy=240.5, dist=(-0.28, 0.09, 1e-3, -8e-4, 0.01), width=752, height=480),
+        KB4(286.6, 286.5, 422.3, 395.2, k1=-0.0068, k2=0.045, k3=-0.0435, k4=0.0084, width=848, height=800),
+        DoubleSphere(158.3, 158.27, 254.96, 256.89, xi=-0.172, alpha=0.593, width=512, height=512),
     ],
-    ids=["eucm", "pinhole4", "pinhole5"],
+    ids=["eucm", "pinhole4", "pinhole5", "kb4", "ds"],
 )
 def test_camera_info_round_trip(tmp_path, bag_format, camera):
     path = bag_path(tmp_path, bag_format)
@@ -428,9 +430,18 @@ def test_camera_info_of_other_drivers(tmp_path):
         assert recording.camera_info("/camera_info").dist == (0.0,) * 5
 
 
+def test_camera_info_of_realsense_ros_t265_is_kannala_brandt(tmp_path):
+    # realsense-ros writes a T265 fisheye's factory calibration as "equidistant" with a fifth, zero coefficient
+    write_camera_info(tmp_path / "t265.bag", "equidistant", [-0.0068, 0.045, -0.0435, 0.0084, 0.0])
+    with Recording(tmp_path / "t265.bag") as recording:
+        assert recording.camera_info("/camera_info") == KB4(
+            500.0, 501.0, 320.0, 240.0, -0.0068, 0.045, -0.0435, 0.0084, 640, 480
+        )
+
+
 @pytest.mark.parametrize(
     ("model", "d"),
-    [("equidistant", [0.1, 0.01, 0.001, 0.0001]), ("rational_polynomial", [0.1, 0.01, 0, 0, 0, 0.2, 0, 0])],
+    [("equidistant", [0.1, 0.01, 0.001]), ("fov", [0.9]), ("rational_polynomial", [0.1, 0.01, 0, 0, 0, 0.2, 0, 0])],
 )
 def test_camera_info_of_unsupported_models_is_refused(tmp_path, model, d):
     write_camera_info(tmp_path / "camera.bag", model, d)

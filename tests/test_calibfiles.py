@@ -1,31 +1,45 @@
-"""Kalibr and Basalt calibration files: the real published files load, and round-trip unchanged."""
+"""Kalibr, Basalt and camera_info forms: the real published files load, and round-trip unchanged."""
 
 import json
 
 import pytest
 import yaml
 
-from gpo.calibfiles import load_basalt, load_kalibr, save_basalt, save_kalibr
-from gpo.camera import Pinhole
+from gpo.calibfiles import (
+    camera_from_camera_info,
+    camera_info_distortion,
+    load_basalt,
+    load_kalibr,
+    save_basalt,
+    save_kalibr,
+)
+from gpo.camera import EUCM, KB4, DoubleSphere, Omni, Pinhole
 
 BASALT_EUCM_FILES = ["tumvi_512_eucm_calib.json", "euroc_eucm_calib.json"]
+BASALT_FILES = {
+    "tumvi_512_eucm_calib.json": EUCM,
+    "euroc_eucm_calib.json": EUCM,
+    "t265_kb4_calib.json": KB4,
+    "euroc_ds_calib.json": DoubleSphere,
+    "tumvi_512_ds_calib.json": DoubleSphere,
+}
 
 
-@pytest.mark.parametrize("name", BASALT_EUCM_FILES)
+@pytest.mark.parametrize("name", BASALT_FILES)
 def test_basalt_files_load_with_their_published_values(fetch_or_skip, name):
     path = fetch_or_skip(f"basalt/data/{name}")
     published = json.loads(path.read_text())["value0"]
     cameras = load_basalt(path)
     assert len(cameras) == len(published["intrinsics"]) == 2
     for camera, entry, size in zip(cameras, published["intrinsics"], published["resolution"], strict=True):
+        assert type(camera) is BASALT_FILES[name]
         values = entry["intrinsics"]
-        assert [camera.fx, camera.fy, camera.cx, camera.cy, camera.alpha, camera.beta] == [
-            values[k] for k in ("fx", "fy", "cx", "cy", "alpha", "beta")
-        ]
+        assert sorted(values) == sorted(camera.PARAMETER_NAMES)
+        assert {key: getattr(camera, key) for key in values} == values
         assert [camera.width, camera.height] == size
 
 
-@pytest.mark.parametrize("name", BASALT_EUCM_FILES)
+@pytest.mark.parametrize("name", BASALT_FILES)
 def test_basalt_file_round_trips_unchanged_through_our_basalt_writer(fetch_or_skip, tmp_path, name):
     path = fetch_or_skip(f"basalt/data/{name}")
     original = json.loads(path.read_text())
@@ -34,21 +48,43 @@ def test_basalt_file_round_trips_unchanged_through_our_basalt_writer(fetch_or_sk
     assert load_basalt(save_basalt(tmp_path / "bare.json", load_basalt(path))) == load_basalt(path)
 
 
-@pytest.mark.parametrize("name", BASALT_EUCM_FILES)
+@pytest.mark.parametrize("name", BASALT_FILES)
 def test_basalt_cameras_round_trip_unchanged_through_kalibr(fetch_or_skip, tmp_path, name):
     cameras = load_basalt(fetch_or_skip(f"basalt/data/{name}"))
     named = {f"cam{i}": camera for i, camera in enumerate(cameras)}
     written = save_kalibr(tmp_path / "camchain.yaml", named, rostopics={"cam0": "/cam0/image_raw"})
     assert load_kalibr(written) == named
+
+
+@pytest.mark.parametrize("name", BASALT_EUCM_FILES)
+def test_kalibr_writes_eucm_intrinsics_in_kalibrs_order(fetch_or_skip, tmp_path, name):
+    cameras = load_basalt(fetch_or_skip(f"basalt/data/{name}"))
+    named = {f"cam{i}": camera for i, camera in enumerate(cameras)}
+    written = save_kalibr(tmp_path / "camchain.yaml", named, rostopics={"cam0": "/cam0/image_raw"})
     document = yaml.safe_load(written.read_text())
     assert document["cam0"]["intrinsics"] == [cameras[0].alpha, cameras[0].beta, *cameras[0].params[:4].tolist()]
     assert document["cam0"]["rostopic"] == "/cam0/image_raw" and "rostopic" not in document["cam1"]
 
 
-def test_unsupported_basalt_model_is_named(fetch_or_skip):
-    path = fetch_or_skip("basalt/data/t265_kb4_calib.json")
-    with pytest.raises(ValueError, match=r"t265_kb4_calib\.json, camera 0: unsupported camera model 'kb4'"):
+def test_kalibr_writes_ds_and_kb4_in_kalibrs_forms(tmp_path):
+    ds = DoubleSphere(fx=349.7, fy=348.7, cx=365.9, cy=249.3, xi=-0.24, alpha=0.567, width=752, height=480)
+    kb4 = KB4(286.6, 286.5, 422.3, 395.2, k1=-0.0068, k2=0.045, k3=-0.0435, k4=0.0084, width=848, height=800)
+    document = yaml.safe_load(save_kalibr(tmp_path / "camchain.yaml", {"cam0": ds, "cam1": kb4}).read_text())
+    assert document["cam0"]["camera_model"] == "ds" and document["cam0"]["distortion_model"] == "none"
+    assert document["cam0"]["intrinsics"] == [-0.24, 0.567, 349.7, 348.7, 365.9, 249.3]
+    assert document["cam1"]["camera_model"] == "pinhole" and document["cam1"]["distortion_model"] == "equidistant"
+    assert document["cam1"]["intrinsics"] == [286.6, 286.5, 422.3, 395.2]
+    assert document["cam1"]["distortion_coeffs"] == [-0.0068, 0.045, -0.0435, 0.0084]
+
+
+def test_unsupported_basalt_model_is_named(tmp_path):
+    path = tmp_path / "fov_calib.json"
+    entry = {"camera_type": "fov", "intrinsics": {"fx": 1.0, "fy": 1.0, "cx": 0.0, "cy": 0.0, "w": 0.9}}
+    path.write_text(json.dumps({"value0": {"intrinsics": [entry], "resolution": [[640, 480]]}}))
+    with pytest.raises(ValueError, match=r"fov_calib\.json, camera 0: unsupported camera model 'fov'"):
         load_basalt(path)
+    with pytest.raises(TypeError, match="Basalt files are written for EUCM, DoubleSphere and KB4"):
+        save_basalt(tmp_path / "x.json", [Pinhole(1.0, 1.0, 0.0, 0.0, (0.0,) * 4, 4, 4)])
 
 
 def test_kalibr_pinhole_radtan_round_trip(tmp_path):
@@ -64,18 +100,46 @@ def test_kalibr_refuses_what_it_cannot_hold(tmp_path):
     with_k3 = Pinhole(fx=1.0, fy=1.0, cx=0.0, cy=0.0, dist=(0.0, 0.0, 0.0, 0.0, 0.1), width=4, height=4)
     with pytest.raises(ValueError, match="no k3"):
         save_kalibr(tmp_path / "x.yaml", {"cam0": with_k3})
-    path = tmp_path / "ds.yaml"
+    path = tmp_path / "fov.yaml"
     path.write_text(
         yaml.safe_dump(
-            {"cam0": {"camera_model": "ds", "intrinsics": [-0.2, 0.6, 350, 350, 640, 400], "resolution": [1280, 800]}}
+            {"cam0": {"camera_model": "pinhole", "intrinsics": [350, 350, 640, 400], "distortion_model": "fov",
+                      "distortion_coeffs": [0.9], "resolution": [1280, 800]}}
         )
     )
-    with pytest.raises(ValueError, match=r"ds\.yaml, cam0: unsupported camera model 'ds'"):
+    with pytest.raises(ValueError, match=r"fov\.yaml, cam0: unsupported camera model 'pinhole' with distortion 'fov'"):
         load_kalibr(path)
     equidistant = {"camera_model": "pinhole", "intrinsics": [300, 300, 320, 240], "distortion_model": "equidistant"}
-    path.write_text(yaml.safe_dump({"cam0": equidistant | {"distortion_coeffs": [0.1] * 4, "resolution": [640, 480]}}))
-    with pytest.raises(ValueError, match=r"unsupported camera model 'pinhole' with distortion 'equidistant'"):
+    path.write_text(yaml.safe_dump({"cam0": equidistant | {"distortion_coeffs": [0.1] * 3, "resolution": [640, 480]}}))
+    with pytest.raises(ValueError, match=r"equidistant needs 4 distortion_coeffs \[k1, k2, k3, k4\], got 3"):
         load_kalibr(path)
     path.write_text(yaml.safe_dump({"cam0": {"camera_model": "eucm", "intrinsics": [0.6, 1.1, 1, 1, 0, 0]}}))
     with pytest.raises(ValueError, match="missing the field 'resolution'"):
         load_kalibr(path)
+
+
+CAMERA_INFO_CAMERAS = [
+    EUCM(fx=286.0, fy=286.2, cx=424.3, cy=400.1, alpha=0.6, beta=1.1, width=848, height=800),
+    DoubleSphere(fx=158.3, fy=158.27, cx=254.96, cy=256.89, xi=-0.172, alpha=0.593, width=512, height=512),
+    KB4(fx=286.6, fy=286.5, cx=422.3, cy=395.2, k1=-0.0068, k2=0.045, k3=-0.0435, k4=0.0084, width=848, height=800),
+    Pinhole(fx=600.0, fy=601.0, cx=376.0, cy=240.0, dist=(-0.28, 0.09, 1e-3, -8e-4, 0.01), width=752, height=480),
+]
+
+
+@pytest.mark.parametrize("camera", CAMERA_INFO_CAMERAS, ids=lambda camera: type(camera).__name__)
+def test_camera_info_round_trip(camera):
+    model, d = camera_info_distortion(camera)
+    k = [camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0]
+    assert camera_from_camera_info(model, d, k, camera.width, camera.height, "info") == camera
+
+
+def test_camera_info_reads_realsense_ros_equidistant_with_a_fifth_zero_and_refuses_the_rest():
+    k = [286.6, 0.0, 422.3, 0.0, 286.5, 395.2, 0.0, 0.0, 1.0]
+    camera = camera_from_camera_info("equidistant", [-0.0068, 0.045, -0.0435, 0.0084, 0.0], k, 848, 800, "t265")
+    assert isinstance(camera, KB4) and camera.dist == (-0.0068, 0.045, -0.0435, 0.0084)
+    with pytest.raises(ValueError, match=r"t265: distortion model 'equidistant' with 3 coefficients"):
+        camera_from_camera_info("equidistant", [0.1, 0.2, 0.3], k, 848, 800, "t265")
+    with pytest.raises(ValueError, match=r"t265: distortion model 'kannala' with 4 coefficients"):
+        camera_from_camera_info("kannala", [0.1, 0.2, 0.3, 0.4], k, 848, 800, "t265")
+    with pytest.raises(TypeError, match="Omni has no camera_info distortion model"):
+        camera_info_distortion(Omni(400.0, 400.0, 320.0, 320.0, 1.1, (0.0,) * 4, 640, 640))

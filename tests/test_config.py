@@ -6,6 +6,7 @@ import yaml
 
 from gpo.calibfiles import save_kalibr
 from gpo.config import load_rig, save_rig
+from gpo.rig import CameraMount
 from gpo.sim.rigs import downward_rig, t265_rig
 
 
@@ -25,11 +26,56 @@ def test_rig_round_trip(tmp_path, make_rig):
     )
 
 
-def test_the_people_numbers_are_the_mount_of_the_simulator(tmp_path):
+def test_the_saved_mount_is_the_simulators_position_and_roll_pitch_yaw(tmp_path):
     document = yaml.safe_load(save_rig(tmp_path / "rig.yaml", t265_rig()).read_text())
-    assert document["mount"]["height_m"] == pytest.approx(0.12)
-    assert document["mount"]["pitch_deg"] == pytest.approx(6.0)
-    assert document["mount"]["roll_deg"] == pytest.approx(1.5)
+    assert set(document["mount"]) == {"position_m", "rpy_deg"}
+    np.testing.assert_allclose(document["mount"]["position_m"], [0.6, 0.0, 0.12], atol=1e-12)
+    np.testing.assert_allclose(document["mount"]["rpy_deg"], [1.5, 6.0, 0.0], atol=1e-9)
+
+
+def write_mount(tmp_path, mount: dict):
+    document = yaml.safe_load(save_rig(tmp_path / "rig.yaml", t265_rig()).read_text())
+    document["mount"] = mount
+    (tmp_path / "rig.yaml").write_text(yaml.safe_dump(document))
+    return tmp_path / "rig.yaml"
+
+
+def test_rpy_deg_is_the_body_frame_in_base_link_as_rep_103_has_it(tmp_path):
+    # yawed 90 degrees to the left and pitched 30 degrees down: the optical axis points left and down
+    rig = load_rig(write_mount(tmp_path, {"position_m": [0.1, 0.2, 0.3], "rpy_deg": [0.0, 30.0, 90.0]}))
+    optical_axis = rig.mount.rotation.apply([0.0, 0.0, 1.0])
+    np.testing.assert_allclose(optical_axis, [0.0, np.cos(np.radians(30)), -np.sin(np.radians(30))], atol=1e-12)
+    # rolled 10 degrees: the image's right (optical x) tips down, as the camera's left side lifts
+    rig = load_rig(write_mount(tmp_path, {"position_m": [0.1, 0.2, 0.3], "rpy_deg": [10.0, 0.0, 0.0]}))
+    assert rig.mount.rotation.apply([1.0, 0.0, 0.0])[2] == pytest.approx(-np.sin(np.radians(10.0)))
+    forward = CameraMount.forward(0.1, 0.2, 0.3, np.radians(6.0), np.radians(1.5))
+    rpy = CameraMount.from_rpy([0.1, 0.2, 0.3], np.radians(1.5), np.radians(6.0), 0.0)
+    np.testing.assert_allclose(rpy.rotation.as_matrix(), forward.rotation.as_matrix(), atol=1e-15)
+    np.testing.assert_allclose(np.degrees(forward.body_rpy), [1.5, 6.0, 0.0], atol=1e-12)
+
+
+def test_the_optical_quaternion_is_still_read_alone_or_beside_a_consistent_rpy(tmp_path):
+    rig = t265_rig()
+    quaternion = rig.mount.rotation.as_quat().tolist()
+    position = rig.mount.position.tolist()
+    for mount in ({"position_m": position, "quaternion_xyzw": quaternion},
+                  {"position_m": position, "quaternion_xyzw": quaternion, "rpy_deg": [1.5, 6.0, 0.0]}):
+        again = load_rig(write_mount(tmp_path, mount)).mount
+        np.testing.assert_allclose(again.rotation.as_matrix(), rig.mount.rotation.as_matrix(), atol=1e-12)
+
+
+def test_an_rpy_and_a_quaternion_that_disagree_are_shown_both_as_roll_pitch_yaw(tmp_path):
+    rig = t265_rig()
+    mount = {"position_m": [0.6, 0.0, 0.12], "quaternion_xyzw": rig.mount.rotation.as_quat().tolist()}
+    path = write_mount(tmp_path, mount | {"rpy_deg": [1.5, 8.0, 0.0]})
+    disagree = r"rig\.yaml: mount rpy_deg and quaternion_xyzw disagree by 2\.000 degrees"
+    with pytest.raises(ValueError, match=disagree) as error:
+        load_rig(path)
+    assert "rpy_deg is [1.500, 8.000, 0.000] and quaternion_xyzw is [1.500, 6.000, 0.000]" in str(error.value)
+    for bad, message in (({"rpy_deg": [1.0, 2.0]}, r"mount\.rpy_deg\.2: missing"),
+                         ({"quaternion_xyzw": [0, 0, 0, 0]}, "quaternion cannot be all zeros")):
+        with pytest.raises(ValueError, match=message):
+            load_rig(write_mount(tmp_path, {"position_m": [0.6, 0.0, 0.12]} | bad))
 
 
 def test_camera_from_a_camchain_file(tmp_path):
@@ -48,9 +94,9 @@ def test_camera_from_a_camchain_file(tmp_path):
 
 def test_missing_fields_are_named(tmp_path):
     document = yaml.safe_load(save_rig(tmp_path / "rig.yaml", t265_rig()).read_text())
-    del document["mount"]["quaternion_xyzw"]
+    del document["mount"]["rpy_deg"]
     (tmp_path / "rig.yaml").write_text(yaml.safe_dump(document))
-    with pytest.raises(ValueError, match=r"mount\.quaternion_xyzw: missing"):
+    with pytest.raises(ValueError, match=r"mount: .*no orientation: give rpy_deg: \[roll, pitch, yaw\]"):
         load_rig(tmp_path / "rig.yaml")
     document = yaml.safe_load(save_rig(tmp_path / "rig.yaml", t265_rig()).read_text())
     del document["camera"]

@@ -39,9 +39,10 @@ def sources_table(text: str) -> dict[str, str]:
     """SOURCES.md's file tables: ``"<repo-name>/<path>"`` -> git blob sha-1."""
     blobs, repository = {}, None
     for line in text.splitlines():
-        if heading := re.match(r"### (\S+)\s+\(commit [0-9a-f]{40}\)", line):
+        # "### kalibr  (commit <sha>)" or "### boofcv-data — <owner/name>, commit <sha>"
+        if heading := re.match(r"### (\S+)\s.*commit [0-9a-f]{40}", line):
             repository = heading[1]
-        elif (row := re.match(r"\| (\S+) \| \d+ \| ([0-9a-f]{40}) \|", line)) and repository:
+        elif (row := re.match(r"\| (\S+) \| \d+ \| `?([0-9a-f]{40})`? \|", line)) and repository:
             blobs[f"{repository}/{row[1]}"] = row[2]
     return blobs
 
