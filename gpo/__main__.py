@@ -25,7 +25,8 @@ from gpo.camera import EUCM, T265_LIKE, Pinhole
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run, tracking_path
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
-from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, preset, recording, simulate, write_sample_data
+from gpo.sim.population import render
+from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording, simulate, write_sample_data
 from gpo.sim.table4 import PATHS as TABLE4_PATHS
 from gpo.sim.table4 import reproduce_table4
 from gpo.trajectory import Trajectory
@@ -201,14 +202,9 @@ def sweep_command(args) -> int:
     spec = load_spec(args.spec)
     if args.workers is not None and args.workers < 1:
         raise ValueError(f"--workers must be at least 1, not {args.workers}")
-    for name, _ in spec.presets():
-        preset(name)
     with cluster_client(args.scheduler, args.workers) as client:
-        presets = spec.presets()
-        names, seeds = [name for name, _ in presets], [seed for _, seed in presets]
-        formats, quiet = ["ros1"] * len(presets), [False] * len(presets)
-        paths = client.gather(client.map(recording, names, formats, quiet, seeds, pure=False)) if presets else []
-        result = sweep(spec.expand(dict(zip(presets, map(str, paths), strict=True))), args.out, client)
+        bags = render(client, spec.presets())
+        result = sweep(spec.expand({pair: str(path) for pair, path in bags.items()}), args.out, client)
     print(summary_text(result.table))
     failed = result.failed
     print(
