@@ -26,7 +26,7 @@ from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 from gpo.pipeline import METHODS, VECTORS, OdometryResult, load_config, run, tracking_path
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
 from gpo.sim.population import render
-from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording, simulate, write_sample_data
+from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, preset, recording, simulate, write_sample_data
 from gpo.sim.table4 import PATHS as TABLE4_PATHS
 from gpo.sim.table4 import reproduce_table4
 from gpo.trajectory import Trajectory
@@ -200,6 +200,9 @@ def sweep_command(args) -> int:
     from gpo.batch import cluster_client, load_spec, summary_text, sweep
 
     spec = load_spec(args.spec)
+    load_config(spec.config)  # a base config that cannot be read stops the sweep before it starts
+    for name, _ in spec.presets():
+        preset(name)
     if args.workers is not None and args.workers < 1:
         raise ValueError(f"--workers must be at least 1, not {args.workers}")
     with cluster_client(args.scheduler, args.workers) as client:

@@ -67,6 +67,7 @@ from gpo.trajectory import Trajectory
 TRUTH_TOPIC = "/mocap/base_link"  # the simulator's ground truth; a spec names its own for other recordings
 RESULTS = ("results.parquet", "results.csv")
 FINISHED = ("ok", "partial")  # statuses a sweep started again does not repeat
+CONNECT_TIMEOUT_S = 20  # the longest wait for a scheduler given by its address
 PRESENTATION_MODULES = ("__main__.py", "plots.py", "widgets.py")  # not part of the code version
 
 
@@ -416,16 +417,20 @@ def summary_text(table: pd.DataFrame) -> str:
 def cluster_client(scheduler: str | None = None, workers: int | None = None) -> Iterator:
     """A Dask client: of the scheduler at ``scheduler`` (``tcp://HOST:PORT``), else at ``DASK_SCHEDULER_ADDRESS``,
     else of a new local cluster of ``workers`` single-threaded worker processes (default: one per core), closed on
-    leaving."""
+    leaving. Raises ValueError naming the address of a scheduler that does not answer within ``CONNECT_TIMEOUT_S``."""
     address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
     if address:
-        with Client(address, timeout="20s") as client:
+        try:
+            client = Client(address, timeout=CONNECT_TIMEOUT_S)
+        except (OSError, TimeoutError) as error:
+            raise ValueError(f"cannot reach the Dask scheduler at {address}: {error}") from None
+        with client:
             yield client
         return
     workers = workers or os.cpu_count() or 1
     with (
         LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
         ) as cluster,
         Client(cluster) as client,
     ):
