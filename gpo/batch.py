@@ -8,7 +8,8 @@ goes through ``gpo.pipeline.run`` and is evaluated against the recording's groun
 
 - ``runs/KEY/trajectory.tum``, ``runs/KEY/trajectory.summary.yaml`` (``OdometryResult.write``),
   ``runs/KEY/config.yaml`` (the run's whole config after its overrides) and ``runs/KEY/row.json`` (its metrics);
-- ``results.parquet`` and ``results.csv``: one row per run, rewritten after every finished run.
+- ``results.parquet`` and ``results.csv``: one row per run, rewritten as runs finish (at most every
+  ``TABLE_EVERY_S``) and at the end, also when the sweep is interrupted.
 
 KEY is a hash of the recording's content, the run's whole config and the code version (``code_version``: the
 method layer's sources), so a sweep started again skips every run already finished with that key (``row.json``
@@ -67,6 +68,7 @@ from gpo.trajectory import Trajectory
 TRUTH_TOPIC = "/mocap/base_link"  # the simulator's ground truth; a spec names its own for other recordings
 RESULTS = ("results.parquet", "results.csv")
 FINISHED = ("ok", "partial")  # statuses a sweep started again does not repeat
+TABLE_EVERY_S = 10.0  # while a sweep runs its table is rewritten at most this often (each run's row.json at once)
 CONNECT_TIMEOUT_S = 20  # the longest wait for a scheduler given by its address
 PRESENTATION_MODULES = ("__main__.py", "plots.py", "widgets.py")  # not part of the code version
 
@@ -265,7 +267,8 @@ def sweep(
     ``out``. Ctrl-C stops the sweep with every finished run kept."""
     out = Path(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
-    finished = {row["key"]: row for row in read_rows(out) if row["status"] in FINISHED}
+    rows = {row["key"]: row for row in read_rows(out)}
+    finished = {key for key, row in rows.items() if row["status"] in FINISHED}
     paths = sorted({r.recording for r in runs})
     digests = dict(zip(paths, client.gather(client.map(_digest_or_error, paths, pure=False)), strict=True))
     version = code_version()
@@ -280,6 +283,7 @@ def sweep(
             key = run_key(str(digest), {"file": run_.config, "overrides": run_.overrides}, version)
             row = base_row(run_, key) | {"status": "failed", "error": f"{type(error).__name__}: {error}"}
             _keep(out, Outcome(row), None)
+            rows[key] = row
             executed.append(key)
             continue
         document = config_to_dict(config)
@@ -293,6 +297,7 @@ def sweep(
         for key, (run_, config, document) in pending.items()
     }
     bar = tqdm(total=len(futures), desc="runs", unit="run", disable=not progress)
+    written = time.monotonic()
     try:
         for future in as_completed(futures):
             key, run_, document = futures[future]
@@ -303,16 +308,20 @@ def sweep(
                 outcome = Outcome(base_row(run_, key) | failure)
             outcome.row["recording_sha256"] = digests[run_.recording]
             _keep(out, outcome, document)
+            rows[key] = outcome.row
             executed.append(key)
             bar.update()
             if on_result is not None:
                 on_result(outcome.row)
-            write_table(out)
+            if time.monotonic() - written > TABLE_EVERY_S:
+                write_table(out, rows.values())
+                written = time.monotonic()
     finally:
         bar.close()
         for future in futures:
             future.cancel()
-    return SweepResult(write_table(out), executed, reused)
+        table = write_table(out, rows.values())
+    return SweepResult(table, executed, reused)
 
 
 def _digest_or_error(path: str) -> str:
@@ -353,11 +362,11 @@ def read_rows(out) -> list[dict]:
     return rows
 
 
-def write_table(out) -> pd.DataFrame:
-    """Gather ``out/runs/*/row.json`` into ``results.parquet`` and ``results.csv`` (each written to a temporary name,
-    then renamed); return the table, sorted by recording and parameters."""
+def write_table(out, rows=None) -> pd.DataFrame:
+    """Gather ``rows`` (default: ``out/runs/*/row.json``) into ``results.parquet`` and ``results.csv`` in ``out``
+    (each written to a temporary name, then renamed); return the table, sorted by recording and parameters."""
     out = Path(out)
-    table = pd.DataFrame(read_rows(out))
+    table = pd.DataFrame(list(read_rows(out) if rows is None else rows))
     if table.empty:
         return table
     parameters = parameter_columns(table)
@@ -387,8 +396,8 @@ def parameter_columns(table: pd.DataFrame) -> list[str]:
     return [c for c in table.columns if c.startswith("param.")]
 
 
-def summary_text(table: pd.DataFrame) -> str:
-    """The table for people: one line per run, errors in %, mm and degrees."""
+def summary_text(table: pd.DataFrame, speed: bool = True) -> str:
+    """The table for people: one line per run, errors in %, mm and degrees, and (``speed``) frames per second."""
     if table.empty:
         return "no runs"
     columns = ["recording", *parameter_columns(table), "status"]
@@ -401,6 +410,8 @@ def summary_text(table: pd.DataFrame) -> str:
         "APE rmse mm": ("ape_rmse_m", 1e3, 1),
         "frames/s": ("frames_per_second", 1.0, 1),
     }
+    if not speed:
+        del metrics["frames/s"]
     for label, (column, scale, digits) in metrics.items():
         values = table[column] if column in table else pd.Series([None] * len(table))
         shown[label] = (pd.to_numeric(values, errors="coerce") * scale).round(digits)
