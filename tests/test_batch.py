@@ -134,6 +134,11 @@ def test_spec_expands_to_the_grid_and_names_its_errors(tmp_path):
 # ----------------------------------------------------------------------------------------------- local cluster
 
 
+def stop(row: dict) -> None:
+    """Ctrl-C at the first finished run."""
+    raise KeyboardInterrupt
+
+
 def test_sweep_on_a_local_cluster_keeps_failures_and_resumes(bags, tmp_path):
     good = [
         Run(bags["early"], "early", overrides={"klt.window_px": 15}),
@@ -153,6 +158,12 @@ def test_sweep_on_a_local_cluster_keeps_failures_and_resumes(bags, tmp_path):
         assert len(first.executed) == 2 and first.reused == []
         second = sweep(good + failing, out, client, progress=False)
         third = sweep(good + failing, out, client, progress=False)
+        interrupted = [Run(bags["late"], "late", overrides={"klt.window_px": w}) for w in (15, 31)]
+        with pytest.raises(KeyboardInterrupt):
+            sweep(interrupted, tmp_path / "interrupted", client, progress=False, on_result=stop)
+        kept = read_table(tmp_path / "interrupted")  # the table holds the run finished before Ctrl-C
+        resumed = sweep(interrupted, tmp_path / "interrupted", client, progress=False)
+    assert len(kept) == 1 and resumed.reused == kept["key"].tolist() and len(resumed.executed) == 1
     assert sorted(second.reused) == sorted(first.executed)  # the finished runs were not run again
     assert len(second.executed) == 2 + 3
     assert len(third.reused) == 4
