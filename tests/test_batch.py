@@ -30,7 +30,7 @@ from gpo.batch import (
 )
 from gpo.metrics import final_error
 from gpo.pipeline import config_to_dict, load_config, run
-from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording
 from gpo.trajectory import Trajectory
 
 REPOSITORY = Path(gpo.__file__).resolve().parents[1]
@@ -129,6 +129,10 @@ def test_spec_expands_to_the_grid_and_names_its_errors(tmp_path):
         load_spec(spec_path)
     with pytest.raises(ValueError, match=r"glob .*nothing\*\.bag matches no file"):
         SweepSpec(recordings=[{"glob": str(tmp_path / "nothing*.bag")}]).expand()
+
+
+def test_a_preset_with_its_own_seed_is_the_preset(bags):
+    assert recording("test", seed=PRESETS["test"].seed, progress=False) == Path(bags["test"])
 
 
 # ----------------------------------------------------------------------------------------------- local cluster

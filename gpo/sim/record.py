@@ -201,7 +201,8 @@ def recording(name: str = "sample", format: str = "ros1", progress: bool = True,
     chosen = preset(name) if seed is None else dataclasses.replace(preset(name), seed=seed)
     key = hashlib.sha256(repr((asdict(chosen), format, _source_fingerprint())).encode()).hexdigest()[:12]
     suffix = ".bag" if format == "ros1" else ""
-    path = cache_dir() / f"{name}{'' if seed is None else f'-seed{seed}'}-{key}{suffix}"
+    own_seed = chosen.seed == preset(name).seed
+    path = cache_dir() / f"{name}{'' if own_seed else f'-seed{seed}'}-{key}{suffix}"
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
         partial = path.with_name(path.name.replace(key, f"{key}-partial-{os.getpid()}"))
