@@ -6,6 +6,8 @@ python -m gpo run BAG ... --write-bag OUT.bag    also a copy of the bag with the
 python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
 python -m gpo table4 [PATH ...]   the first paper's Table 4 (and the second's Table 2 metrics) on long1-3
 python -m gpo recording [NAME ...] [--jobs N]    the cached bags of simulated presets, rendered N at a time if needed
+python -m gpo sweep SPEC.yaml --out DIR [--scheduler tcp://HOST:PORT] [--workers N]   many runs on Dask (gpo.batch)
+python -m gpo sweep-report DIR    PNG plots of a sweep's errors against each parameter, per recording and overall
 
 Every command checks its inputs and output paths before it works, never writes onto one of its inputs, and
 writes each file to a temporary name and then renames it; a result it flags (an unreliable calibration, a run
@@ -41,7 +43,8 @@ from gpo.pipeline import (
     tracking_path,
 )
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
-from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording, simulate, write_sample_data
+from gpo.sim.population import render
+from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, preset, recording, simulate, write_sample_data
 from gpo.sim.table4 import PATHS as TABLE4_PATHS
 from gpo.sim.table4 import reproduce_table4
 from gpo.trajectory import Trajectory
@@ -305,6 +308,63 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
+# ----------------------------------------------------------------------------------------------- sweeps (gpo.batch)
+
+def add_sweep_commands(commands) -> None:
+    """The ``sweep`` and ``sweep-report`` subcommands."""
+    sweep_parser = commands.add_parser("sweep", help="many runs (recordings x configs) on a Dask cluster, resumable")
+    sweep_parser.add_argument("spec", type=Path, help="the sweep's YAML: recordings, config, set, vary, runs")
+    sweep_parser.add_argument("--out", type=Path, required=True, help="results folder (a sweep resumes in it)")
+    sweep_parser.add_argument(
+        "--scheduler", help="a running Dask scheduler, tcp://HOST:PORT (default: DASK_SCHEDULER_ADDRESS, else local)"
+    )
+    sweep_parser.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    report_parser = commands.add_parser("sweep-report", help="plots of a sweep's errors against its parameters")
+    report_parser.add_argument("results", type=Path, help="the folder a sweep wrote")
+    report_parser.add_argument("--out", type=Path, help="folder for the PNG files (default: RESULTS/report)")
+
+
+def sweep_command(args) -> int:
+    """``python -m gpo sweep``: the spec's presets rendered on the cluster (cached), then every run; the summary."""
+    from gpo.batch import cluster_client, load_spec, summary_text, sweep
+
+    spec = load_spec(args.spec)
+    load_config(spec.config)  # a base config that cannot be read stops the sweep before it starts
+    for name, _ in spec.presets():
+        preset(name)
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers must be at least 1, not {args.workers}")
+    with cluster_client(args.scheduler, args.workers) as client:
+        bags = render(client, spec.presets())
+        result = sweep(spec.expand({pair: str(path) for pair, path in bags.items()}), args.out, client)
+    print(summary_text(result.table))
+    failed = result.failed
+    print(
+        f"{len(result.executed)} runs done now, {len(result.reused)} already done before, {len(failed)} failed; "
+        f"table: {args.out / 'results.parquet'} and results.csv"
+    )
+    return 1 if len(failed) else 0
+
+
+def sweep_report(results: Path, out: Path | None = None) -> list[Path]:
+    """PNG figures of the sweep in ``results``: the final error against each parameter (per recording and the median
+    of all), or per recording when nothing was varied."""
+    from gpo.batch import parameter_columns, read_table
+    from gpo.plots import draw_sweep
+
+    table = read_table(results)
+    out = out or results / "report"
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for parameter in parameter_columns(table) or [None]:
+        fig = Figure(figsize=(7, 4.2))
+        draw_sweep(table, parameter, fig.subplots())
+        name = "recording" if parameter is None else parameter.removeprefix("param.").replace(".", "_")
+        written.append(out / f"error_vs_{name}.png")
+        fig.savefig(written[-1], dpi=110, bbox_inches="tight")
+    return written
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m gpo",
@@ -357,6 +417,7 @@ def main(argv: list[str] | None = None) -> int:
         "--delta", type=_positive, default=RPE_DELTA_M, help="RPE segment length, m (default 1)"
     )
     evaluate_parser.add_argument("--plot", type=Path, help="PNG to write: both paths and the error along the path")
+    add_sweep_commands(commands)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exit:  # usage errors (2) and --help (0), returned like every other outcome
@@ -423,6 +484,11 @@ def _command(args) -> int:
         print(table.format(), table.format_table2(), sep="\n\n")
     elif args.command == "sample-data":
         for path in write_sample_data(args.out):
+            print(f"wrote {path}")
+    elif args.command == "sweep":
+        return sweep_command(args)
+    elif args.command == "sweep-report":
+        for path in sweep_report(args.results, args.out):
             print(f"wrote {path}")
     return 0
 

@@ -621,3 +621,38 @@ def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.A
     ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
     ax.set_title(f"{int(check.kept_loops.sum())} of {len(loops)} loops kept, C = {check.cardinality}")
     return ax
+
+
+def draw_sweep(table, parameter: str | None, ax=None, metric: str = "final_error_percent") -> plt.Axes:
+    """A sweep's ``metric`` (a column of ``gpo.batch``'s table; default the final position error, % of the distance)
+    against ``parameter`` (a ``param.`` column; None: against the recording): thin lines one per recording, the
+    thick black line the median over every recording. Where other parameters vary too, each point is the median over
+    them. Runs that failed are left out and counted in the title."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.5, 4))
+    good = table[table["status"] != "failed"]
+    failed = len(table) - len(good)
+    if parameter is None:
+        per_recording = good.groupby("recording")[metric].median()
+        ax.bar(per_recording.index.astype(str), per_recording.to_numpy(), color="tab:blue")
+        ax.set_xlabel("recording")
+        ax.tick_params(axis="x", labelrotation=30)
+    else:
+        values = sorted(good[parameter].dropna().unique(), key=lambda v: (isinstance(v, str), v))
+        numeric = all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool) for v in values)
+        position = {v: (float(v) if numeric else i) for i, v in enumerate(values)}
+        for recording, runs in good.groupby("recording"):
+            medians = runs.groupby(parameter)[metric].median()
+            ax.plot([position[v] for v in medians.index], medians.to_numpy(), marker="o", lw=1, alpha=0.7,
+                    label=str(recording))
+        overall = good.groupby(parameter)[metric].median()
+        ax.plot([position[v] for v in overall.index], overall.to_numpy(), color="k", lw=2.5, marker="s",
+                label="median of all")
+        if not numeric:
+            ax.set_xticks(list(position.values()), [str(v) for v in values])
+        ax.set_xlabel(parameter.removeprefix("param."))
+        ax.legend(fontsize="small")
+    ax.set_ylabel("final position error [% of distance]" if metric == "final_error_percent" else metric)
+    runs_text = f"{len(good)} runs" + (f", {failed} failed (not shown)" if failed else "")
+    ax.set_title(runs_text, fontsize="small")
+    return ax

@@ -111,9 +111,10 @@ def floor_extent(plan: MotionPlan, rig: Rig, margin: float) -> tuple[float, floa
     return x.min() - margin, x.max() + margin, y.min() - margin, y.max() + margin
 
 
-def simulate(name: str, out, format: str = "ros1", progress: bool = True) -> Path:
-    """Render preset ``name`` into a new bag at ``out`` (``format``: ros1, ros2 or ros2-mcap); return its path."""
-    chosen = preset(name)
+def simulate(name: str, out, format: str = "ros1", progress: bool = True, seed: int | None = None) -> Path:
+    """Render preset ``name`` into a new bag at ``out`` (``format``: ros1, ros2 or ros2-mcap); return its path.
+    ``seed`` replaces the preset's (its floor's texture and the tracking camera's drift)."""
+    chosen = preset(name) if seed is None else dataclasses.replace(preset(name), seed=seed)
     rig = RIGS[chosen.rig]()
     plan = named_plan(chosen.path)
     floor = make_floor(
@@ -189,23 +190,25 @@ def _source_fingerprint() -> str:
     return digest.hexdigest()[:12]
 
 
-def recording(name: str = "sample", format: str = "ros1", progress: bool = True) -> Path:
-    """The bag of preset ``name``: generated on first use, then read from the cache.
+def recording(name: str = "sample", format: str = "ros1", progress: bool = True, seed: int | None = None) -> Path:
+    """The bag of preset ``name`` (with ``seed`` in place of its own, when given): generated on first use, then
+    read from the cache.
 
     Each process renders into a file of its own and renames it into place when complete, so processes that
     want the same recording at once never read one another's half-written bag (the last rename wins; the
     files are identical).
     """
-    chosen = preset(name)
+    chosen = preset(name) if seed is None else dataclasses.replace(preset(name), seed=seed)
     key = hashlib.sha256(repr((asdict(chosen), format, _source_fingerprint())).encode()).hexdigest()[:12]
     suffix = ".bag" if format == "ros1" else ""
-    path = cache_dir() / f"{name}-{key}{suffix}"
+    own_seed = chosen.seed == preset(name).seed
+    path = cache_dir() / f"{name}{'' if own_seed else f'-seed{seed}'}-{key}{suffix}"
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
         partial = path.with_name(path.name.replace(key, f"{key}-partial-{os.getpid()}"))
         if partial.exists():
             _remove(partial)
-        simulate(name, partial, format, progress)
+        simulate(name, partial, format, progress, seed)
         if path.exists():  # another process finished first
             _remove(partial)
         else:
