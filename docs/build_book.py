@@ -4,15 +4,19 @@ One page per chapter, named as its notebook (nbconvert's "lab" template; figures
 "contents", "previous" and "next" links at its top and bottom, and an index.html listing every chapter's title
 and its sections. Chapters follow the order of README.md's chapter table; notebooks it does not list come last.
 The ipywidgets panels need no JavaScript: each is shown as it stands in the saved notebook, a line with its
-controls' default values followed by the panel's stored output.
+controls' default values followed by the panel's stored output. The formulas are rendered by MathJax 2.7, shipped
+with the book from the pinned PyPI package jupyter-server-mathjax (copied to out/book/mathjax/): the pages read
+offline, with no CDN.
 
     python docs/build_book.py --notebooks notebooks --out out/book
 """
 
 import argparse
 import html
+import shutil
 from pathlib import Path
 
+import jupyter_server_mathjax
 import nbformat
 from bs4 import BeautifulSoup, SoupStrainer
 from jinja2 import DictLoader
@@ -22,9 +26,15 @@ WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
 WIDGET_STATE = "application/vnd.jupyter.widget-state+json"
 README = Path(__file__).resolve().parents[1] / "README.md"
 BOOK_TITLE = "gpo — visual odometry from the floor"
+MATHJAX = Path(jupyter_server_mathjax.__file__).parent / "static"
+MATHJAX_URL = "mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML-full,Safe"
+"""MathJax relative to a chapter page, with the configuration the package bundles (its only web font is STIX)."""
 
 CHAPTER_TEMPLATE = """{%- extends 'index.html.j2' -%}
 {% block extra_css %}
+<script type="text/x-mathjax-config">
+MathJax.Hub.Config({"HTML-CSS": {availableFonts: [], webFont: "STIX-Web", imageFont: null}});
+</script>
 <style type="text/css">
 nav.book-nav { display: flex; gap: 1.5em; padding: 0.6em 1em; font-family: var(--jp-ui-font-family); }
 nav.book-nav a { text-decoration: none; }
@@ -184,8 +194,10 @@ def build_book(notebooks: Path, out: Path) -> list[Path]:
         template_name="lab",
         extra_loaders=[DictLoader({"book.html.j2": CHAPTER_TEMPLATE})],
         template_file="book.html.j2",
+        mathjax_url=MATHJAX_URL,
     )
     out.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(MATHJAX, out / "mathjax", dirs_exist_ok=True)
     entries = []
     for k, nb in enumerate(chapters):
         nb.metadata["title"] = titles[k]

@@ -138,14 +138,16 @@ class _Camera:
 class EUCM(_Camera):
     """Extended unified camera model.
 
-    A point p = (x, y, z) is projected as (the first paper's eqs. 1-4)::
+    A point p = (x, y, z) is projected as (the first paper's eqs. 1-7: its rho is d here, eqs. 4-5 give
+    (x_P, y_P), eq. 6 puts them on the plane z = 1 and eq. 7 multiplies by K)::
 
         d = sqrt(beta * (x^2 + y^2) + z^2)
         u = fx * x / (alpha * d + (1 - alpha) * z) + cx
         v = fy * y / (alpha * d + (1 - alpha) * z) + cy
 
     valid where ``z > -w * d`` with ``w = alpha / (1 - alpha)`` for alpha <= 0.5 and
-    ``w = (1 - alpha) / alpha`` otherwise. A pixel is unprojected (eqs. 5-7) as::
+    ``w = (1 - alpha) / alpha`` otherwise (Khomutenko et al.; the paper gives no validity region). A pixel
+    is unprojected (Khomutenko et al.'s closed form; the paper has no equation for it) as::
 
         mx = (u - cx) / fx,  my = (v - cy) / fy,  r^2 = mx^2 + my^2
         mz = (1 - beta * alpha^2 * r^2) / (alpha * sqrt(1 - (2 alpha - 1) * beta * r^2) + 1 - alpha)

@@ -11,15 +11,31 @@ frame of its own (x right, y down, z along the face's viewing direction); ``Face
 face-frame vectors into the fisheye frame (fisheye_optical <- face). Pixels are (u, v), u right,
 v down, the centre of the top-left pixel at (0, 0), as in ``gpo.camera`` and OpenCV.
 
-Face rotations (numbered as the paper's eqs. 8-12; the signs are this package's)
--------------------------------------------------------------------------------
-With R_x(t), R_y(t) the rotations by t about the fisheye's x and y axes::
+Face rotations: the first paper's eqs. 8-12
+-------------------------------------------
+The paper writes X_C = R_Face X_CI (eq. 14): R_Face takes a face's coordinates to the cubemap model's, the
+fisheye frame here (fisheye_optical <- face). The paper's web text lists each matrix's nine entries in one run::
+
+    (8)  R_Front  : 1 0 0,  0 1 0,  0 0 1
+    (9)  R_Left   : 0 0 1,  0 1 0, -1 0 0
+    (10) R_Right  : 0 0 -1, 0 1 0,  1 0 0
+    (11) R_Bottom : 1 0 0,  0 0 -1, 0 1 0
+    (12) R_Top    : 1 0 0,  0 0 1,  0 -1 0
+
+The same text lists eq. 7's K as "fx 0 0, 0 fy 0, cx cy 1" and eq. 21's H as "h11 h21 h31, h12 h22 h32,
+h13 h23 1": column by column. Read the same way, eqs. 8-12 are exactly the matrices used here, with
+R_x(t), R_y(t) the rotations by t about the fisheye's x (right) and y (down) axes::
 
     (8)  R_front  = I
     (9)  R_left   = R_y(-90 deg) = [[0, 0, -1], [0, 1, 0], [ 1, 0, 0]]
     (10) R_right  = R_y(+90 deg) = [[0, 0,  1], [0, 1, 0], [-1, 0, 0]]
     (11) R_bottom = R_x(-90 deg) = [[1, 0, 0], [0, 0,  1], [0, -1, 0]]
     (12) R_top    = R_x(+90 deg) = [[1, 0, 0], [0, 0, -1], [0,  1, 0]]
+
+Read row by row instead, eqs. 9-12 are the transposes of these: the printed R_Left would be this R_right,
+and the printed R_Bottom this R_top, which turns the face's axis (0, 0, 1) to (0, -1, 0), up in the optical
+frame (y down), so a face named bottom would see the ceiling. The package takes the column reading because
+under it every face looks where its name says (``tests/test_paper_equations.py`` shows both readings).
 
 The third column of each matrix is the face's viewing direction in the fisheye frame: left (-x),
 right (+x), bottom (+y, down: the floor for a forward-looking camera) and top (-y). Every face keeps
@@ -40,19 +56,26 @@ length N/2 is the fisheye's: at its centre the front face is exactly as dense (p
 tangent) as the fisheye at its principal point, and no face throws detail away. N = 572 pixels for
 the T265-like camera (f = 286 px); pass ``face_size`` to choose another.
 
-EUCM to cubemap (numbered as the paper's eqs. 13-18)
-----------------------------------------------------
-For every pixel (u, v) of face F, the fisheye pixel (u_f, v_f) that it shows::
+EUCM to cubemap: the first paper's eqs. 13-18, then its eqs. 6-7
+----------------------------------------------------------------
+As printed, in the fisheye's optical frame (x right, y down, z forward)::
 
-    (13) m = K^-1 (u, v, 1)^T                             ray in the face frame
-    (14) p = R_F m                                        the same ray in the fisheye frame
-    (15) d = sqrt(beta (p_x^2 + p_y^2) + p_z^2)
-    (16) u_f = fx p_x / (alpha d + (1 - alpha) p_z) + cx
-    (17) v_f = fy p_y / (alpha d + (1 - alpha) p_z) + cy
-    (18) valid where p_z > -w d (the EUCM's valid region, ``gpo.camera.EUCM``) and (u_f, v_f)
-         lies inside the fisheye image
+    (13) X_CI = (u, v, 1)                                  a pixel of face F
+    (14) X_C  = R_Face X_CI
+    (15) X_C  = (x_C, y_C, z_C)
+    (16) rho  = sqrt(beta (x_C^2 + y_C^2) + z_C^2)
+    (17) x_P  = x_C / (alpha rho + (1 - alpha) z_C)
+    (18) y_P  = y_C / (alpha rho + (1 - alpha) z_C)
+    (6)  X_M  = (x_P, y_P, 1)
+    (7)  X_I  = K X_M = (u_f, v_f, 1),  K = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]   the fisheye pixel
 
-Eqs. 15-18 are ``camera.project`` of ``gpo.camera``, so any camera model of that module works.
+The package differs in one place: eq. 13 here is X_CI = K_face^-1 (u, v, 1), the ray of the face pixel.
+A rotation turns directions, and (u, v, 1) in pixels is a direction only once the face's own intrinsics
+(the paper's f_Face, c_Face: the section above) are taken off; the paper's text calibrates those intrinsics but its
+eq. 13 leaves them implicit. The package also marks where the fisheye sees nothing: a face pixel is valid
+where z_C > -w rho (the EUCM's valid region, ``gpo.camera.EUCM``) and (u_f, v_f) lies inside the image.
+
+Eqs. 15-18 with 6-7 are ``camera.project`` of ``gpo.camera``, so any camera model of that module works.
 These look-up tables are computed once per (camera, face size) and applied with ``cv2.remap``.
 Face pixels that are not valid are masked: ``maps`` holds NaN there and ``face_image`` the border
 value, never a colour copied from the edge of the fisheye image.
@@ -78,7 +101,7 @@ FACE_ROTATIONS = {
     "bottom": Rotation.from_euler("x", -90.0, degrees=True),
     "top": Rotation.from_euler("x", 90.0, degrees=True),
 }
-"""fisheye_optical <- face, the module docstring's eqs. 8-12."""
+"""fisheye_optical <- face: the first paper's eqs. 8-12 read column by column (the module docstring)."""
 
 CROSS_CELLS = {"top": (0, 1), "left": (1, 0), "front": (1, 1), "right": (1, 2), "bottom": (2, 1)}
 """(row, column) of each face in the 3 x 3 cross drawn by ``Cubemap.cross``."""
@@ -127,8 +150,8 @@ class Face:
             return np.all((uv >= low) & (uv <= high), axis=-1)
 
     def rays(self, uv) -> tuple[np.ndarray, np.ndarray]:
-        """Unit rays (..., 3) in the fisheye frame of face pixels ``uv (..., 2)`` (eqs. 13-14); valid (...) where
-        ``uv`` lies on the face, NaN elsewhere."""
+        """Unit rays (..., 3) in the fisheye frame of face pixels ``uv (..., 2)`` (eqs. 13-14, with K^-1); valid
+        (...) where ``uv`` lies on the face, NaN elsewhere."""
         pinhole = self.pinhole
         valid = self.contains(uv)
         # K^-1 (u, v, 1) = (x, y, 1)

@@ -10,29 +10,53 @@ start. Arrays broadcast: every function takes scalars or arrays (..., 2) / (...,
 The measurement
 ---------------
 The floor does not move, so when the floor image shows a floor point move from ``c`` to ``q`` (both in
-base_link, metres, ``floor_displacement``), the robot's point at ``c`` moved by about ``c - q``. The first
+base_link, metres, ``floor_displacement``), the robot's point at ``c`` moved by about ``d = c - q``. The first
 paper reads that vector as the motion of a **virtual front wheel** a wheelbase L ahead of the rear axle (the
-floor image's centre) and feeds it to a kinematic bicycle model:
+floor image's centre) and feeds it to a kinematic bicycle model.
 
-    (23)-(24)  s = Z / f                              metres per pixel of a top view from height Z, focal f
-    (25)       V = |d| / dt                          speed of the virtual front wheel, d = c - q (m)
-    (26)       delta = arctan(d_y / d_x)             steering angle
-    (27)       S = V dt                              distance the wheel moved in the frame
-    (28)       beta = arctan(l_r tan(delta) / L)     slip angle at the reference point l_r ahead of the rear axle
-    (29)       R = L / (tan(delta) cos(beta))        turning radius of the reference point
-    (30)       theta_dot = V cos(beta) tan(delta) / L
-    (31)-(32)  x_dot = V cos(theta + beta),  y_dot = V sin(theta + beta)
-    (33)-(34)  x += x_dot dt, y += y_dot dt, theta += theta_dot dt      (Euler step)
+The first paper's eqs. 23-34, as printed
+----------------------------------------
+Its (dx, dy) are the two components of the median motion vector m_bar in the GPI, V and delta the virtual
+front wheel's speed and steering, l_r the distance from the rear axle to the centre of mass, L the wheelbase::
 
-``PaperBicycle`` implements these as written. Where they fall short:
+    (23) scale = z / f                                 z the camera's height, f its focal length (pixels)
+    (24) m_bar = scale * m                             the pixel motion m in metres
+    (25) V     = sqrt(dx^2 + dy^2) / dt
+    (26) delta = arctan(dy / dx) - pi / 2
+    (27) S     = L / tan(delta)                        rear axle to the instantaneous centre (IC)
+    (28) beta  = arctan(l_r / S) = arctan(l_r tan(delta) / L)
+    (29) R     = S / cos(beta)                         the centre of mass to the IC
+    (30) theta_dot = omega = V / R = V tan(delta) cos(beta) / L
+    (31) theta = theta + theta_dot dt
+    (32) x_dot = V cos(theta + beta)
+    (33) y_dot = V sin(theta + beta)
+    (34) (x, y, theta)_{t+1} = (x, y, theta)_t + (x_dot, y_dot, theta_dot) dt
 
-- eq. 26's arctangent folds the direction of travel into (-90, 90) degrees and eq. 25's V is never
-  negative, so reverse driving reads as driving forward, and on a turn on the spot (d_x ~ 0) the sign of
-  delta flips with the noise in d_x;
+Where this module computes them otherwise (``PaperBicycle``, ``metres_per_pixel``):
+
+- eqs. 23-24: ``metres_per_pixel(z, f)`` is eq. 23; the pipeline's ortho-GPI has its scale by construction
+  (``FloorImage.metres_per_pixel``) and its affine map applies eq. 24 with the image's axes.
+- eq. 26 is in the GPI's axes, where straight ahead lies along the image's y axis, hence the -pi/2. Here d is in
+  base_link (x forward, y left), where straight ahead is d_y = 0, so delta = arctan(d_y / d_x) with no offset.
+  With the paper's (dx, dy) taken as the wheel's motion towards the robot's right and forward (dx = -d_y,
+  dy = d_x), eq. 26 read with the two-argument arctangent, atan2(dy, dx) - pi/2, is exactly this delta for
+  every forward motion; read with the one-argument arctan as printed it is this delta when the wheel moves to
+  the right and this delta - pi when it moves to the left, so the printed form needs atan2 to mean a steering
+  angle. ``tests/test_paper_equations.py`` shows both.
+- eqs. 27 and 29 are computed as printed (``instant_centre_distance``, ``turning_radius``); with delta = 0, S and
+  R are infinite and eq. 30 is 0.
+- eqs. 30-34 as printed, at the reference point l_r ahead of the rear axle; ``step`` returns the pose of
+  base_link, l_r behind it. Eq. 31 is the third row of eq. 34; eqs. 32-33 use the heading at the frame's start.
+
+Where the printed model falls short of the motion it measures (chapter 06 measures each):
+
+- eq. 26's arctangent folds the direction of travel into a half turn and eq. 25's V is never negative, so
+  reverse driving reads as driving forward, and on a turn on the spot (d_x ~ 0) the sign of delta flips with
+  the noise in d_x;
 - eq. 30 takes V as the reference point's speed, while eq. 25 measures the front wheel's; they agree only when
   the reference point is the front wheel (l_r = L): otherwise the heading rate is off by cos(beta) / cos(delta)
   (``paper_heading_rate_ratio``), 9.5 % at delta = 24 degrees with l_r = 0;
-- the Euler step (33)-(34) treats the frame's chord as a straight line.
+- the Euler step (34) treats the frame's chord as a straight line.
 
 The **exact** kinematics of a rigid robot that does not slide sideways at its rear axle (the base_link origin)
 need no model at all: a speed v of the rear axle and a yaw rate omega move the point (L, 0) at
@@ -125,7 +149,7 @@ def arc_increment(v, omega, dt) -> np.ndarray:
 
 @dataclass(frozen=True)
 class PaperBicycle:
-    """The first paper's kinematic bicycle model, eqs. (25)-(34), as written.
+    """The first paper's kinematic bicycle model, eqs. (25)-(34) (listed in the module docstring), in base_link.
 
     ``wheelbase_m`` L: from the rear axle to the virtual front wheel, the floor point whose motion is
     measured (the floor image's centre). ``rear_to_reference_m`` l_r: from the rear axle to the reference
@@ -146,7 +170,8 @@ class PaperBicycle:
 
     def inputs(self, displacement_m, dt_s) -> tuple[np.ndarray, np.ndarray]:
         """Eqs. (25)-(26): speed V (m/s, never negative) and steering delta (rad) from the front wheel's
-        displacement (..., 2) in base_link over ``dt_s``."""
+        displacement (..., 2) in base_link over ``dt_s``: delta = arctan(d_y / d_x), eq. 26 in base_link's axes
+        (the paper's arctan(dy / dx) - pi/2 is in the GPI's; module docstring)."""
         d = np.asarray(displacement_m, dtype=float)
         speed = np.hypot(d[..., 0], d[..., 1]) / dt_s
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -157,21 +182,25 @@ class PaperBicycle:
         """Eq. (28): the slip angle beta (rad) at the reference point."""
         return np.arctan(self.rear_to_reference_m * np.tan(steering) / self.wheelbase_m)
 
-    def turning_radius(self, steering) -> np.ndarray:
-        """Eq. (29): the reference point's turning radius R (m), infinite when driving straight."""
+    def instant_centre_distance(self, steering) -> np.ndarray:
+        """Eq. (27): S = L / tan(delta), from the rear axle to the instantaneous centre (m), infinite when straight."""
         with np.errstate(divide="ignore"):
-            return self.wheelbase_m / (np.tan(steering) * np.cos(self.slip(steering)))
+            return self.wheelbase_m / np.tan(steering)
+
+    def turning_radius(self, steering) -> np.ndarray:
+        """Eq. (29): R = S / cos(beta), the reference point's turning radius (m), infinite when driving straight."""
+        return self.instant_centre_distance(steering) / np.cos(self.slip(steering))
 
     def rates(self, speed, steering, theta) -> np.ndarray:
-        """Eqs. (30)-(32): (x_dot, y_dot, theta_dot) of the reference point in the odometry frame."""
+        """Eqs. (30), (32), (33): (x_dot, y_dot, theta_dot) of the reference point in the odometry frame."""
         beta = self.slip(steering)
         theta_dot = speed * np.cos(beta) * np.tan(steering) / self.wheelbase_m
         return np.stack([speed * np.cos(theta + beta), speed * np.sin(theta + beta), theta_dot], axis=-1)
 
     def step(self, pose, displacement_m, dt_s) -> np.ndarray:
         """Eqs. (25)-(34): base_link's pose (x, y, theta) after one frame whose front-wheel displacement (2,) m
-        in base_link was measured. The model moves its reference point by an Euler step (33)-(34); base_link
-        lies l_r behind it."""
+        in base_link was measured. The model moves its reference point by the Euler step of eq. (34) (its third
+        row is eq. 31); base_link lies l_r behind it."""
         pose = np.asarray(pose, dtype=float)
         speed, steering = self.inputs(displacement_m, dt_s)
         lever = self.rear_to_reference_m

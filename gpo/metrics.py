@@ -39,6 +39,8 @@ The papers' numbers
 -------------------
 First paper (Ground Plane Odometry), Tables 3 and 4, "translation error": the final position error in metres after
 placing the estimate's first pose on the truth's (``translation_error``, the ``position_m`` of ``final_error``).
+Its Table 3 lists, per test, the minimum, maximum and average of the "relative translation error"
+(``relative_translation_errors``: evo's RPE, translation part, over all pose pairs 1 m of travel apart).
 
 Second paper (floor feature odometer), Table 2, after aligning the first pose (``table2_metrics``): positioning
 RMSE (APE RMSE, metres), heading RMSE (degrees), final error in mm and in % of the distance travelled, and relative
@@ -370,3 +372,27 @@ def table2_metrics(
     """The second paper's Table 2 for one run, after placing the estimate's first pose on the truth's: positioning
     RMSE (m), heading RMSE (deg), final error (mm and % of the distance) and relative error (% per 1 m of RPE)."""
     return evaluate(estimate, truth, Alignment.ORIGIN, RPE_DELTA_M, max_difference_s).table2()
+
+
+TABLE3_DELTA_M = 1.0  # the segment length of the first paper's Table 3 as read here: metres travelled by the truth
+
+
+def relative_translation_errors(
+    estimate: Trajectory | PoseTrajectory3D,
+    truth: Trajectory | PoseTrajectory3D,
+    delta_m: float = TABLE3_DELTA_M,
+    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
+) -> np.ndarray:
+    """The first paper's "relative translation error" (its Table 3 lists their minimum, maximum and average), metres:
+    evo's RPE, translation part, over every pair of poses ``delta_m`` of the truth's travel apart. The paper names
+    the measure and its evaluation toolbox but no segment length; 1 m is this suite's reading. Raises ValueError as
+    ``associate`` does, and when the truth travels less than ``delta_m``."""
+    estimated, reference = associate(estimate, truth, max_difference_s)
+    rpe = metrics.RPE(
+        metrics.PoseRelation.translation_part, delta_m, metrics.Unit.meters, all_pairs=True, pairs_from_reference=True
+    )
+    try:
+        rpe.process_data((reference, estimated))
+    except filters.FilterException as error:
+        raise ValueError(f"no pair of poses {delta_m} m of travel apart: {error}") from error
+    return np.asarray(rpe.error, dtype=float)

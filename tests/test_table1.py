@@ -1,0 +1,45 @@
+"""The first paper's Table 1 under its definitions (``gpo.sim.table1.paper_table1``)."""
+
+import numpy as np
+import pytest
+
+from gpo.camera import T265_LIKE
+from gpo.sim.table1 import CALIBRATION_ERRORS, PAPER_TABLE1, format_paper_table1, miscalibrated, paper_table1
+
+
+def test_the_papers_truth_is_its_measured_squares():
+    long, short, area = PAPER_TABLE1["truth"]
+    assert long == pytest.approx(4 * 20.007) and short == pytest.approx(2 * 20.050)
+    assert area == pytest.approx(long * short, abs=0.02)  # 3209.139 printed, 3209.123 from the two sides
+    for image in ("GPI", "ortho-GPI"):  # the paper's (a + c) / 2 is the long side: near 80 mm, not 40
+        assert PAPER_TABLE1[image][0] > 75 and PAPER_TABLE1[image][1] < 45
+
+
+def test_miscalibrated_applies_relative_focal_and_absolute_other_errors():
+    camera = miscalibrated(T265_LIKE)
+    assert camera.fx == pytest.approx(T265_LIKE.fx * (1 + CALIBRATION_ERRORS["fx"]))
+    assert camera.cx == pytest.approx(T265_LIKE.cx + CALIBRATION_ERRORS["cx"])
+    assert camera.alpha == pytest.approx(T265_LIKE.alpha + CALIBRATION_ERRORS["alpha"])
+    assert miscalibrated(T265_LIKE, {}) == T265_LIKE
+
+
+@pytest.fixture(scope="module")
+def table():
+    return paper_table1(mean_over=2)
+
+
+def test_the_ortho_gpi_corrects_the_gpi_on_a_placement_it_never_saw(table):
+    truth, rows = table
+    assert truth == pytest.approx((80.0, 40.0, 3200.0))
+    second = {row.image: row for row in rows if row.where == "second"}
+    gpi_area, ortho_area = (abs(second[name].area_mm2 - truth[2]) for name in ("GPI", "ortho-GPI"))
+    assert gpi_area > 10.0  # tens of mm^2: the miscalibrated, hand-picked GPI
+    assert ortho_area < gpi_area / 5
+    assert abs(second["ortho-GPI"].long_mm - truth[0]) < 0.2
+
+
+def test_the_format_prints_the_papers_rows_first(table):
+    text = format_paper_table1(*table)
+    assert text.splitlines()[0].startswith("the paper")
+    assert "84.664 (  4.636)" in text and "3207.881 (  1.258)" in text
+    assert text.count("(a+c)/2 mm") == 4 and np.isfinite([row.area_mm2 for row in table[1]]).all()
