@@ -2,6 +2,7 @@
 short presets' disturbances reach the floor patch the ortho-GPI shows."""
 
 import hashlib
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -67,6 +68,16 @@ def test_the_bag_holds_the_simulators_truth(test_bag):
 
 def test_regenerating_a_recording_gives_the_same_bytes(test_bag, tmp_path):
     assert sha256(simulate("test", tmp_path / "again.bag", progress=False)) == sha256(test_bag)
+
+
+def test_another_process_on_one_thread_renders_the_same_bytes(test_bag, tmp_path):
+    """The noise comes from OpenCV's generator and the lookups from its threaded remap: neither depends on the
+    process or on how many threads OpenCV runs."""
+    out = tmp_path / "elsewhere.bag"
+    environment = {**os.environ, "OPENCV_FOR_THREADS_NUM": "1"}
+    command = [sys.executable, "-m", "gpo", "simulate", "--preset", "test", "--out", str(out)]
+    subprocess.run(command, env=environment, capture_output=True, check=True)
+    assert sha256(out) == sha256(test_bag)
 
 
 def test_sample_data_regenerate_byte_for_byte(tmp_path):
