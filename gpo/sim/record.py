@@ -21,16 +21,14 @@ makes a new file.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
-import pooch
 from tqdm.auto import tqdm
 
+from gpo import cache
 from gpo.bag import BagWriter
 from gpo.rig import Rig
 from gpo.sim.floors import make_floor
@@ -164,11 +162,6 @@ def _write_static_tree(bag: BagWriter, rig: Rig) -> None:
         )
 
 
-def cache_dir() -> Path:
-    """Where generated recordings are kept: ``$GPO_CACHE_DIR``, else the user's cache folder for gpo."""
-    return Path(os.environ.get("GPO_CACHE_DIR") or pooch.os_cache("gpo") / "recordings")
-
-
 def fingerprint_sources() -> list[Path]:
     """The sources of the modules ``simulate`` runs, which the recording cache's key hashes.
 
@@ -181,45 +174,19 @@ def fingerprint_sources() -> list[Path]:
     ]
 
 
-def _source_fingerprint() -> str:
-    """A hash of everything that shapes a recording: the sources of ``fingerprint_sources()``."""
-    digest = hashlib.sha256()
-    for source in fingerprint_sources():
-        digest.update(source.read_bytes())
-    return digest.hexdigest()[:12]
-
-
 def recording(name: str = "sample", format: str = "ros1", progress: bool = True) -> Path:
-    """The bag of preset ``name``: generated on first use, then read from the cache.
+    """The bag of preset ``name``: generated on first use, then read from the cache (``gpo.cache``, ``recordings``).
 
-    Each process renders into a file of its own and renames it into place when complete, so processes that
-    want the same recording at once never read one another's half-written bag (the last rename wins; the
-    files are identical).
+    Its key holds the preset, the format and the simulator's sources (``fingerprint_sources``). Each process renders
+    into a file of its own and renames it into place when complete, so processes that want the same recording at
+    once never read one another's half-written bag (the files are identical).
     """
     chosen = preset(name)
-    key = hashlib.sha256(repr((asdict(chosen), format, _source_fingerprint())).encode()).hexdigest()[:12]
-    suffix = ".bag" if format == "ros1" else ""
-    path = cache_dir() / f"{name}-{key}{suffix}"
+    key = cache.key(asdict(chosen), format, sources=fingerprint_sources())
+    path = cache.path("recordings", name, key, ".bag" if format == "ros1" else "")
     if not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(path.name.replace(key, f"{key}-partial-{os.getpid()}"))
-        if partial.exists():
-            _remove(partial)
-        simulate(name, partial, format, progress)
-        if path.exists():  # another process finished first
-            _remove(partial)
-        else:
-            partial.rename(path)
+        cache.write(path, lambda partial: simulate(name, partial, format, progress))
     return path
-
-
-def _remove(path: Path) -> None:
-    if path.is_dir():
-        for child in path.iterdir():
-            child.unlink()
-        path.rmdir()
-    else:
-        path.unlink()
 
 
 FLOOR_BOARDS = {
