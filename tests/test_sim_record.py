@@ -148,3 +148,9 @@ def test_the_cache_key_hashes_every_module_a_recording_runs():
     loaded = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=True).stdout.split()
     modules = {Path(path).resolve() for path in loaded if not path.endswith("__init__.py")}
     assert modules - {Path(cache.__file__).resolve()} == {path.resolve() for path in fingerprint_sources()}
+
+
+def test_frames_rendered_by_two_processes_make_the_same_bag(test_bag, tmp_path):
+    assert sha256(simulate("test", tmp_path / "parallel.bag", progress=False, jobs=2)) == sha256(test_bag)
+    with pytest.raises(ValueError, match="jobs must be at least 1, not 0"):
+        simulate("test", tmp_path / "none.bag", jobs=0)
