@@ -466,8 +466,9 @@ class FloorRenderer:
         ray_x, ray_y = c * base_x - s * base_y, s * base_x + c * base_y
         x_min, x_max, y_min, y_max, top = self._room
         with np.errstate(divide="ignore", invalid="ignore"):
-            reach_x = np.where(ray_x > 0, np.float32(x_max - centre_x), np.float32(x_min - centre_x)) / ray_x
-            reach_y = np.where(ray_y > 0, np.float32(y_max - centre_y), np.float32(y_min - centre_y)) / ray_y
+            # distance to the wall ahead over the speed towards it: +inf for a ray along the walls (never -inf)
+            reach_x = np.where(ray_x > 0, np.float32(x_max - centre_x), np.float32(centre_x - x_min)) / np.abs(ray_x)
+            reach_y = np.where(ray_y > 0, np.float32(y_max - centre_y), np.float32(centre_y - y_min)) / np.abs(ray_y)
             reach_z = np.where(ray_z > 0, np.float32(top - centre_z) / ray_z, np.float32(np.inf))
         to_wall = np.fmin(reach_x, reach_y)
         centre_x, centre_y = np.float32(centre_x), np.float32(centre_y)
@@ -482,7 +483,8 @@ class FloorRenderer:
         walls = ~on_ceiling
         reach = to_wall[walls]
         along_x = reach_x[walls] <= reach_y[walls]
-        along_wall = np.where(along_x, centre_y + reach * ray_y[walls], centre_x + reach * ray_x[walls])
+        with np.errstate(invalid="ignore"):  # inf * 0 for a ray along a wall: in the branch not chosen
+            along_wall = np.where(along_x, centre_y + reach * ray_y[walls], centre_x + reach * ray_x[walls])
         height = np.float32(top - centre_z) - reach * ray_z[walls]
         rows, cols = self._walls.shape
         u, v = _wrap(along_wall / np.float32(0.016), cols), _wrap(height / np.float32(0.016), rows)
