@@ -7,10 +7,10 @@ project: each keeps its repository's licence (the LICENSE files are in the regis
 caveats named in the loaders' docstrings.
 
 A file's name is ``"<repo-name>/<path in that repository>"``, e.g. ``"basalt/data/tumvi_512_eucm_calib.json"``,
-and it is stored under that same relative path in the cache folder. The cache folder is
-``pooch.os_cache("gpo")``, or the folder named by the environment variable ``GPO_DATA_DIR``: point it at a
-folder that already holds copies in this layout and nothing is downloaded (CI points it at
-``../shared/real_data`` to work offline).
+and it is stored under that same relative path in the data folder: the folder named by the environment variable
+``GPO_DATA_DIR``, else the ``datasets`` folder of gpo's cache (``gpo.cache``). Point ``GPO_DATA_DIR`` at a folder
+that already holds copies in this layout and nothing is downloaded (CI points it at ``../shared/real_data`` to work
+offline).
 """
 
 import difflib
@@ -21,6 +21,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pooch
+
+from gpo import cache
 
 #: repository folder name -> (GitHub owner/repository, pinned commit)
 _REPOSITORIES = {
@@ -102,7 +104,7 @@ _TIMEOUT_S = 30
 
 
 class DatasetUnavailable(RuntimeError):
-    """A registered file is neither in the cache folder nor downloadable (no network, wrong hash, no write access)."""
+    """A registered file is neither in the data folder nor downloadable (no network, wrong hash, no write access)."""
 
 
 def _url(name: str) -> str:
@@ -126,22 +128,23 @@ def _close_matches(name: str) -> list[str]:
     return close
 
 
-def cache_dir() -> Path:
-    """The cache folder: ``$GPO_DATA_DIR`` when set, else pooch's per-user cache for ``gpo``."""
-    return Path(os.environ.get("GPO_DATA_DIR") or pooch.os_cache("gpo")).expanduser()
+def data_dir() -> Path:
+    """The folder of the real files: ``$GPO_DATA_DIR`` when set, else the ``datasets`` folder of gpo's cache."""
+    data = os.environ.get("GPO_DATA_DIR")
+    return Path(data).expanduser() if data else cache.folder("datasets")
 
 
 def fetch(name: str) -> Path:
     """The local path of the registered file ``name``, downloaded (and sha256-checked) on first use.
 
     Raises KeyError for a name not in the registry (naming the closest ones), and `DatasetUnavailable`
-    when the file is not in the cache folder and cannot be downloaded.
+    when the file is not in the data folder and cannot be downloaded.
     """
     if name not in _SHA256:
         close = _close_matches(name)
         hint = f"did you mean {', '.join(map(repr, close))}?" if close else "see gpo.datasets.names()"
         raise KeyError(f"{name!r} is not a gpo dataset file; {hint}")
-    folder = cache_dir()
+    folder = data_dir()
     store = pooch.Pooch(
         path=folder,
         base_url="",
@@ -153,7 +156,7 @@ def fetch(name: str) -> Path:
         return Path(store.fetch(name, downloader=downloader))
     except (OSError, ValueError) as error:  # requests' errors are OSErrors; pooch's hash mismatch is a ValueError
         raise DatasetUnavailable(
-            f"{name}: no valid copy in the cache folder {folder}, and the download from {_url(name)} failed ({error}). "
+            f"{name}: no valid copy in the data folder {folder}, and the download from {_url(name)} failed ({error}). "
             "Set GPO_DATA_DIR to a folder holding a copy as <repo-name>/<path> (e.g. ../shared/real_data), "
             "or connect to the internet and try again."
         ) from error

@@ -50,18 +50,14 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import hashlib
-import json
 import math
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
-import pooch
 
+import gpo.cache
 from gpo.camera import EUCM, Pinhole
 from gpo.cubemap import Cubemap
 from gpo.mount import MountError, detect_corners, estimate_mount
@@ -225,33 +221,25 @@ class RemapTable:
         )
 
 
-def cache_dir() -> Path:
-    """Where tables are kept: ``$GPO_CACHE_DIR``, else the user's cache folder for gpo, ``tables``."""
-    return Path(os.environ.get("GPO_CACHE_DIR") or pooch.os_cache("gpo") / "tables")
-
-
 def table_key(description: dict) -> str:
     """The cache key of a table: a hash of everything it is built from (``description``: plain numbers)."""
-    text = json.dumps({"format": TABLE_FORMAT, **description}, sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return gpo.cache.key({"format": TABLE_FORMAT, **description})
 
 
-def _cached_table(description: dict, floor: FloorImage, camera, build: Callable, cache: bool) -> RemapTable:
-    """The table of ``description``: read from the disk cache when there, else ``build()`` -> (fisheye uv, valid)
-    and, with ``cache``, kept there."""
+def _cached_table(description: dict, floor: FloorImage, camera, build: Callable, keep: bool) -> RemapTable:
+    """The table of ``description``: read from the disk cache (``gpo.cache``, ``tables``) when there, else
+    ``build()`` -> (fisheye uv, valid) and, with ``keep``, kept there."""
     key = table_key({**description, "floor": floor.description(), "camera": _camera_description(camera)})
-    path = cache_dir() / f"table-{key}.npz"
-    if cache and path.exists():
+    path = gpo.cache.path("tables", "table", key, ".npz")
+    if keep and path.exists():
         with np.load(path) as stored:
             return RemapTable(
                 stored["map_x"], stored["map_y"], stored["valid"], floor, (camera.width, camera.height), key
             )
     table = RemapTable.from_points(*build(), floor, camera, key)
-    if cache:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f"{path.stem}-partial-{os.getpid()}.npz")
-        np.savez(partial, map_x=table.map_x, map_y=table.map_y, valid=table.valid)
-        partial.replace(path)
+    if keep:
+        arrays = {"map_x": table.map_x, "map_y": table.map_y, "valid": table.valid}
+        gpo.cache.write(path, lambda partial: np.savez(partial, **arrays))
     return table
 
 
@@ -636,7 +624,7 @@ def analytic_points(
     return uv, valid
 
 
-def floor_points(
+def pixels_to_floor(
     camera: EUCM | Pinhole, mount: CameraMount | tuple[float, float, float], uv
 ) -> tuple[np.ndarray, np.ndarray]:
     """The floor points (..., 2) of base_link, metres, seen at camera pixels ``uv`` (..., 2), and their validity.

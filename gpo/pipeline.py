@@ -45,7 +45,7 @@ from gpo.config import FloorImageSection, read_config, rig_from_config, rig_to_d
 from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, Keypoints, degenerate, detect, refit
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
 from gpo.fusion import FusionSettings, fuse
-from gpo.ground import FloorImage, RemapTable, analytic_table, floor_points, ground_plane_image, ortho_rectify
+from gpo.ground import FloorImage, RemapTable, analytic_table, ground_plane_image, ortho_rectify, pixels_to_floor
 from gpo.kinematics import (
     PaperBicycle,
     compose,
@@ -66,7 +66,6 @@ DEFAULT_CONFIG = "sim_t265.yaml"
 # The floor image for odometry: 1 mm pixels track better than chapter 04's 0.5 mm (a floor point's error per track
 # 0.11 mm against 0.15 mm with a 21-pixel window: the window then spans twice the floor) and take a quarter of the time.
 ODOMETRY_METRES_PER_PIXEL = 1e-3
-ODOMETRY_FLOOR_IMAGE = FloorImage.top_view((0.70, 0.90), (-0.10, 0.10), ODOMETRY_METRES_PER_PIXEL)
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,7 +80,7 @@ class OdometryConfig:
       ``board_image``, a frame of the chessboard ``board`` lying on the floor where ``board`` says;
     - ``gpi``: the plain GPI of the same frame, its own approximate scale and place taken for true;
     - ``keypoints``: no floor image; the ``features`` method detects keypoints in the camera image and turns each
-      into a floor point (``gpo.ground.floor_points``: undistortion, the mount's tilt, its height), the second
+      into a floor point (``gpo.ground.pixels_to_floor``: undistortion, the mount's tilt, its height), the second
       paper's way.
 
     ``features``: the keypoint detector, matching and filters of the ``features`` method (``gpo.features``)."""
@@ -413,7 +412,7 @@ class FloorOdometer:
         if self.config.route != "keypoints":
             return self._metres(start_px), self._metres(end_px), np.ones(len(start_px), dtype=bool)
         camera, mount = self.config.rig.camera, self.config.rig.mount
-        (start, seen_start), (end, seen_end) = (floor_points(camera, mount, p) for p in (start_px, end_px))
+        (start, seen_start), (end, seen_end) = (pixels_to_floor(camera, mount, p) for p in (start_px, end_px))
         return start, end, seen_start & seen_end
 
     @property

@@ -26,10 +26,10 @@ from gpo.ground import (
     analytic_points,
     analytic_table,
     chessboard_route,
-    floor_points,
     front_face_corners,
     ground_plane_image,
     ortho_rectify,
+    pixels_to_floor,
     route_difference,
 )
 from gpo.mount import detect_corners
@@ -51,9 +51,9 @@ OVER_THE_SEAM = FloorImage.top_view(x_range=(0.64, 0.84), y_range=(-0.10, 0.10),
 def table_cache(tmp_path_factory):
     """Every table of this module in a fresh cache folder."""
     with pytest.MonkeyPatch.context() as patch:
-        folder = tmp_path_factory.mktemp("tables")
+        folder = tmp_path_factory.mktemp("cache")
         patch.setenv("GPO_CACHE_DIR", str(folder))
-        yield folder
+        yield folder / "tables"
 
 
 @pytest.fixture(scope="module")
@@ -394,7 +394,7 @@ def test_floor_points_invert_the_analytic_projection(make_rig):
     x_range = (-0.10, 0.10) if rig.name == "downward" else (0.70, 0.90)
     floor = FloorImage.top_view(x_range, (-0.10, 0.10), 2e-3)
     pixels, seen = analytic_points(rig.camera, rig.mount, floor)
-    points, valid = floor_points(rig.camera, rig.mount, pixels[seen])
+    points, valid = pixels_to_floor(rig.camera, rig.mount, pixels[seen])
     assert valid.all()
     truth = floor.pixel_to_base(floor.pixel_centres())[seen]
     np.testing.assert_allclose(points, truth, rtol=0, atol=1e-9)
@@ -402,6 +402,6 @@ def test_floor_points_invert_the_analytic_projection(make_rig):
 
 def test_floor_points_above_the_horizon_are_invalid():
     rig = t265_rig()  # pitched 6 degrees down: the top of the fisheye sees the ceiling
-    points, valid = floor_points(rig.camera, rig.mount, [[424.0, 5.0], [424.0, 790.0]])
+    points, valid = pixels_to_floor(rig.camera, rig.mount, [[424.0, 5.0], [424.0, 790.0]])
     assert valid.tolist() == [False, True]
     assert np.isnan(points[0]).all()

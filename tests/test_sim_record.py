@@ -2,6 +2,7 @@
 short presets' disturbances reach the floor patch the ortho-GPI shows."""
 
 import hashlib
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -9,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gpo import cache
 from gpo.bag import Recording
 from gpo.sim.motion import T265_DRIFT, named_plan, tracking_odometry
 from gpo.sim.record import (
@@ -35,9 +37,9 @@ def sha256(path: Path) -> str:
 @pytest.fixture(scope="module")
 def test_bag(tmp_path_factory) -> Path:
     """The "test" preset, generated once through the cache, in a fresh cache folder."""
-    cache = tmp_path_factory.mktemp("cache")
+    folder = tmp_path_factory.mktemp("cache")
     with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("GPO_CACHE_DIR", str(cache))
+        patch.setenv(cache.ENVIRONMENT_VARIABLE, str(folder))
         first = recording("test", progress=False)
         assert recording("test", progress=False) == first  # the second call reads the cache
     return first
@@ -67,6 +69,16 @@ def test_the_bag_holds_the_simulators_truth(test_bag):
 
 def test_regenerating_a_recording_gives_the_same_bytes(test_bag, tmp_path):
     assert sha256(simulate("test", tmp_path / "again.bag", progress=False)) == sha256(test_bag)
+
+
+def test_another_process_on_one_thread_renders_the_same_bytes(test_bag, tmp_path):
+    """The noise comes from OpenCV's generator and the lookups from its threaded remap: neither depends on the
+    process or on how many threads OpenCV runs."""
+    out = tmp_path / "elsewhere.bag"
+    environment = {**os.environ, "OPENCV_FOR_THREADS_NUM": "1"}
+    command = [sys.executable, "-m", "gpo", "simulate", "--preset", "test", "--out", str(out)]
+    subprocess.run(command, env=environment, capture_output=True, check=True)
+    assert sha256(out) == sha256(test_bag)
 
 
 def test_sample_data_regenerate_byte_for_byte(tmp_path):
@@ -127,11 +139,18 @@ def test_only_the_short_presets_are_disturbed():
 
 def test_the_cache_key_hashes_every_module_a_recording_runs():
     """Every gpo module that importing the simulator loads is hashed, so no change to one reuses a stale bag;
-    the tables that only read recordings are not, so changing them re-renders nothing."""
+    the tables that only read recordings are not, so changing them re-renders nothing; nor is ``gpo.cache``,
+    which names and places the files but does not shape what is in them."""
     program = (
         "import sys, gpo.sim.record\n"
         "print(*(m.__file__ for m in list(sys.modules.values()) if m.__name__.startswith('gpo.')))"
     )
     loaded = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=True).stdout.split()
     modules = {Path(path).resolve() for path in loaded if not path.endswith("__init__.py")}
-    assert modules == {path.resolve() for path in fingerprint_sources()}
+    assert modules - {Path(cache.__file__).resolve()} == {path.resolve() for path in fingerprint_sources()}
+
+
+def test_frames_rendered_by_two_processes_make_the_same_bag(test_bag, tmp_path):
+    assert sha256(simulate("test", tmp_path / "parallel.bag", progress=False, jobs=2)) == sha256(test_bag)
+    with pytest.raises(ValueError, match="jobs must be at least 1, not 0"):
+        simulate("test", tmp_path / "none.bag", jobs=0)

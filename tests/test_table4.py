@@ -6,6 +6,7 @@ On the sample recording, so that it runs in seconds."""
 import numpy as np
 import pytest
 
+from gpo import cache
 from gpo.bag import Recording
 from gpo.fusion import fuse
 from gpo.metrics import MAX_STAMP_DIFFERENCE_S, final_error
@@ -32,9 +33,9 @@ def table(sample):
 
 @pytest.fixture
 def empty_cache(tmp_path, monkeypatch):
-    """Floor runs kept in an empty folder (the recordings stay in theirs)."""
-    monkeypatch.setattr(table4, "cache_dir", lambda: tmp_path)
-    return tmp_path
+    """Floor runs kept in an empty cache folder (the sample recording's path was found before)."""
+    monkeypatch.setenv(cache.ENVIRONMENT_VARIABLE, str(tmp_path))
+    return tmp_path / "runs"
 
 
 def _kept_files(folder):

@@ -21,16 +21,16 @@ makes a new file.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import os
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
-import pooch
 from tqdm.auto import tqdm
 
+from gpo import cache
 from gpo.bag import BagWriter
 from gpo.rig import Rig
 from gpo.sim.floors import make_floor
@@ -111,37 +111,95 @@ def floor_extent(plan: MotionPlan, rig: Rig, margin: float) -> tuple[float, floa
     return x.min() - margin, x.max() + margin, y.min() - margin, y.max() + margin
 
 
-def simulate(name: str, out, format: str = "ros1", progress: bool = True, seed: int | None = None) -> Path:
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """What preset ``chosen`` shows: the ``rig``, its motion ``plan``, the ``renderer`` of its floor (with the
+    preset's disturbances) and the ``frame_times`` (seconds) of its camera frames."""
+
+    chosen: Preset
+    rig: Rig
+    plan: MotionPlan
+    renderer: FloorRenderer
+    frame_times: np.ndarray
+
+    @classmethod
+    def of(cls, name: str, seed: int | None = None) -> Scene:
+        """The scene of preset ``name``; ``seed`` replaces the preset's (its floor's texture and the tracking
+        camera's drift)."""
+        chosen = preset(name) if seed is None else dataclasses.replace(preset(name), seed=seed)
+        rig = RIGS[chosen.rig]()
+        plan = named_plan(chosen.path)
+        floor = make_floor(
+            chosen.floor, floor_extent(plan, rig, FLOOR_MARGIN_M[chosen.rig]), TEXEL_M[chosen.rig], chosen.seed
+        )
+        frame_times = np.arange(0.0, plan.duration_s, 1.0 / rig.rate_hz)
+        path = plan.sample(frame_times)
+        disturbances = chosen.disturbances
+        renderer = FloorRenderer(
+            rig,
+            floor,
+            sheets=disturbances.place_sheets(frame_times, np.column_stack([path.x, path.y, path.yaw])),
+            glints=disturbances.place_glints(),
+        )
+        return cls(chosen, rig, plan, renderer, frame_times)
+
+    def frame(self, index: int) -> np.ndarray:
+        """Camera frame ``index`` (uint8), the same whoever renders it and in whatever order."""
+        times, poses = _exposure(self.plan, self.frame_times[index], self.chosen)
+        return self.renderer.render(poses, frame_seed=(self.chosen.seed, index), times_s=times)
+
+
+def simulate(
+    name: str, out, format: str = "ros1", progress: bool = True, seed: int | None = None, jobs: int = 1
+) -> Path:
     """Render preset ``name`` into a new bag at ``out`` (``format``: ros1, ros2 or ros2-mcap); return its path.
-    ``seed`` replaces the preset's (its floor's texture and the tracking camera's drift)."""
-    chosen = preset(name) if seed is None else dataclasses.replace(preset(name), seed=seed)
-    rig = RIGS[chosen.rig]()
-    plan = named_plan(chosen.path)
-    floor = make_floor(
-        chosen.floor, floor_extent(plan, rig, FLOOR_MARGIN_M[chosen.rig]), TEXEL_M[chosen.rig], chosen.seed
-    )
-    frame_times = np.arange(0.0, plan.duration_s, 1.0 / rig.rate_hz)
-    path = plan.sample(frame_times)
-    disturbances = chosen.disturbances
-    renderer = FloorRenderer(
-        rig,
-        floor,
-        sheets=disturbances.place_sheets(frame_times, np.column_stack([path.x, path.y, path.yaw])),
-        glints=disturbances.place_glints(),
-    )
+
+    ``seed`` replaces the preset's (its floor's texture and the tracking camera's drift). ``jobs`` > 1 renders the
+    frames in that many processes (the bag is the same, byte for byte).
+    """
+    if jobs < 1:
+        raise ValueError(f"jobs must be at least 1, not {jobs}")
+    scene = Scene.of(name, seed)
+    chosen, rig, plan = scene.chosen, scene.rig, scene.plan
     with BagWriter(out, format) as bag:
         _write_static_tree(bag, rig)
         bag.add_trajectory(GROUND_TRUTH_TOPIC, plan.ground_truth(120.0, START_NS), msgtype="pose")
         if chosen.rig == "t265":
             odometry = tracking_odometry(plan, rig.mount, 200.0, T265_DRIFT, chosen.seed, START_NS)
             bag.add_trajectory(ODOMETRY_TOPIC, odometry)
-        for index, time_s in enumerate(tqdm(frame_times, desc=f"rendering {name}", disable=not progress)):
+        frames = _frames(name, seed, scene, jobs)
+        counted = tqdm(frames, desc=f"rendering {name}", total=len(scene.frame_times), disable=not progress)
+        for time_s, image in zip(scene.frame_times, counted, strict=True):
             stamp_ns = START_NS + round(time_s * 1e9)
-            times, poses = _exposure(plan, time_s, chosen)
-            image = renderer.render(poses, frame_seed=(chosen.seed, index), times_s=times)
             bag.add_image(rig.image_topic, stamp_ns, image, rig.frame_id)
             bag.add_camera_info(rig.info_topic, stamp_ns, rig.camera, rig.frame_id)
     return Path(out)
+
+
+FRAMES_PER_TASK = 16  # frames a rendering process renders at a time
+_WORKER_SCENE: dict[str, Scene] = {}  # in a rendering process: the scene it renders
+
+
+def _frames(name: str, seed: int | None, scene: Scene, jobs: int) -> Iterator[np.ndarray]:
+    """The frames of ``scene`` (preset ``name`` with ``seed``) in order, rendered here or by ``jobs`` processes."""
+    count = len(scene.frame_times)
+    if jobs == 1:
+        yield from (scene.frame(index) for index in range(count))
+        return
+    tasks = [range(start, min(start + FRAMES_PER_TASK, count)) for start in range(0, count, FRAMES_PER_TASK)]
+    with ProcessPoolExecutor(jobs, initializer=_start_rendering, initargs=(name, seed)) as pool:
+        for images in pool.map(_render, tasks):
+            yield from images
+
+
+def _start_rendering(name: str, seed: int | None) -> None:
+    """In a rendering process: set up the scene of preset ``name`` (with ``seed``) once."""
+    _WORKER_SCENE["scene"] = Scene.of(name, seed)
+
+
+def _render(indices: range) -> list[np.ndarray]:
+    """In a rendering process: the frames ``indices`` of its scene."""
+    return [_WORKER_SCENE["scene"].frame(index) for index in indices]
 
 
 def _exposure(plan: MotionPlan, time_s: float, chosen: Preset) -> tuple[np.ndarray, np.ndarray]:
@@ -165,11 +223,6 @@ def _write_static_tree(bag: BagWriter, rig: Rig) -> None:
         )
 
 
-def cache_dir() -> Path:
-    """Where generated recordings are kept: ``$GPO_CACHE_DIR``, else the user's cache folder for gpo."""
-    return Path(os.environ.get("GPO_CACHE_DIR") or pooch.os_cache("gpo") / "recordings")
-
-
 def fingerprint_sources() -> list[Path]:
     """The sources of the modules ``simulate`` runs, which the recording cache's key hashes.
 
@@ -182,47 +235,23 @@ def fingerprint_sources() -> list[Path]:
     ]
 
 
-def _source_fingerprint() -> str:
-    """A hash of everything that shapes a recording: the sources of ``fingerprint_sources()``."""
-    digest = hashlib.sha256()
-    for source in fingerprint_sources():
-        digest.update(source.read_bytes())
-    return digest.hexdigest()[:12]
+def recording(
+    name: str = "sample", format: str = "ros1", progress: bool = True, seed: int | None = None, jobs: int = 1
+) -> Path:
+    """The bag of preset ``name`` (with ``seed`` in place of its own, when given): generated on first use, then read
+    from the cache (``gpo.cache``, ``recordings``).
 
-
-def recording(name: str = "sample", format: str = "ros1", progress: bool = True, seed: int | None = None) -> Path:
-    """The bag of preset ``name`` (with ``seed`` in place of its own, when given): generated on first use, then
-    read from the cache.
-
-    Each process renders into a file of its own and renames it into place when complete, so processes that
-    want the same recording at once never read one another's half-written bag (the last rename wins; the
-    files are identical).
+    Its key holds the preset, the format and the simulator's sources (``fingerprint_sources``). Each process renders
+    into a file of its own and renames it into place when complete, so processes that want the same recording at
+    once never read one another's half-written bag (the files are identical). ``jobs``: processes rendering its frames.
     """
     chosen = preset(name) if seed is None else dataclasses.replace(preset(name), seed=seed)
-    key = hashlib.sha256(repr((asdict(chosen), format, _source_fingerprint())).encode()).hexdigest()[:12]
-    suffix = ".bag" if format == "ros1" else ""
-    own_seed = chosen.seed == preset(name).seed
-    path = cache_dir() / f"{name}{'' if own_seed else f'-seed{seed}'}-{key}{suffix}"
+    key = cache.key(asdict(chosen), format, sources=fingerprint_sources())
+    label = name if chosen.seed == preset(name).seed else f"{name}-seed{seed}"
+    path = cache.path("recordings", label, key, ".bag" if format == "ros1" else "")
     if not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(path.name.replace(key, f"{key}-partial-{os.getpid()}"))
-        if partial.exists():
-            _remove(partial)
-        simulate(name, partial, format, progress, seed)
-        if path.exists():  # another process finished first
-            _remove(partial)
-        else:
-            partial.rename(path)
+        cache.write(path, lambda partial: simulate(name, partial, format, progress, seed, jobs))
     return path
-
-
-def _remove(path: Path) -> None:
-    if path.is_dir():
-        for child in path.iterdir():
-            child.unlink()
-        path.rmdir()
-    else:
-        path.unlink()
 
 
 FLOOR_BOARDS = {

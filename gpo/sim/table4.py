@@ -9,16 +9,13 @@ their mean. The first paper's number is its "translation error": the final posit
 pose on the truth (``gpo.metrics.translation_error``).
 
 Both chessboard routes are calibrated on one frame of ``FLOOR_BOARDS["t265"]`` (``board_image_path``), as chapter 04
-does. A floor run (``floor_run``) takes a few seconds a path; each is kept on disk under ``$GPO_CACHE_DIR/runs``,
-keyed by the recording, the whole config and the source of every module a run goes through, so that
+does. A floor run (``floor_run``) takes a few seconds a path; each is kept in the cache's ``runs`` folder
+(``gpo.cache``), keyed by the recording, the whole config and the source of every module a run goes through, so that
 ``python -m gpo table4`` computes them once and chapter 09 reads them back. The EKF runs on the kept floor run.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,11 +23,12 @@ import cv2
 import numpy as np
 
 import gpo
+import gpo.cache
 from gpo.bag import Recording
 from gpo.fusion import fuse
 from gpo.metrics import Evaluation, evaluate
 from gpo.pipeline import OdometryConfig, config_to_dict, load_config, run, tracking_path
-from gpo.sim.record import FLOOR_BOARDS, GROUND_TRUTH_TOPIC, cache_dir, floor_board_image, recording
+from gpo.sim.record import FLOOR_BOARDS, GROUND_TRUTH_TOPIC, fingerprint_sources, floor_board_image, recording
 from gpo.trajectory import Trajectory
 
 PATHS = ("long1", "long2", "long3")
@@ -87,13 +85,11 @@ class FloorRun:
 
 
 def board_image_path() -> Path:
-    """A PNG of the simulated T265 rig's view of ``FLOOR_BOARDS["t265"]`` (written into the cache on first use)."""
-    path = cache_dir() / "floor_board_t265.png"
+    """A PNG of the simulated T265 rig's view of ``FLOOR_BOARDS["t265"]`` (written into the cache on first use, keyed
+    by the simulator's sources like the recordings)."""
+    path = gpo.cache.path("recordings", "floor_board_t265", gpo.cache.key(sources=fingerprint_sources()), ".png")
     if not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f"floor_board_t265-partial-{os.getpid()}.png")
-        cv2.imwrite(str(partial), floor_board_image("t265"))
-        partial.replace(path)
+        gpo.cache.write(path, lambda partial: cv2.imwrite(str(partial), floor_board_image("t265")))
     return path
 
 
@@ -124,29 +120,24 @@ def floor_run(bag, config: OdometryConfig, cache: bool = True) -> FloorRun:
         result.frames_per_second,
     )
     if cache:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f"{path.stem}-partial-{os.getpid()}.npz")
         planar = np.column_stack([done.trajectory.positions[:, :2], done.trajectory.yaw])
-        np.savez(
-            partial,
-            stamps_ns=done.trajectory.stamps_ns,
-            poses=planar,
-            inliers=done.inliers,
-            frames_per_second=done.frames_per_second,
-        )
-        partial.replace(path)
+        arrays = {
+            "stamps_ns": done.trajectory.stamps_ns,
+            "poses": planar,
+            "inliers": done.inliers,
+            "frames_per_second": done.frames_per_second,
+        }
+        gpo.cache.write(path, lambda partial: np.savez(partial, **arrays))
     return done
 
 
 def _run_path(bag: Path, config: OdometryConfig) -> Path:
     document = config_to_dict(config)
-    document.get("floor_image", {}).pop("board_image", None)  # the image's content is fixed by the source below
-    digest = hashlib.sha256(json.dumps([bag.name, document], sort_keys=True, default=str).encode())
+    document.get("floor_image", {}).pop("board_image", None)  # the image's content is fixed by the sources below
     package = Path(gpo.__file__).parent
-    for module in RUN_MODULES:
-        digest.update((package / module).read_bytes())
-    digest.update((package / "sim" / "record.py").read_bytes())  # the board image
-    return cache_dir() / "runs" / f"{bag.stem}-{config.method}-{config.route}-{digest.hexdigest()[:12]}.npz"
+    sources = [*(package / module for module in RUN_MODULES), package / "sim" / "record.py"]  # record: the board
+    key = gpo.cache.key(bag.name, document, sources=sources)
+    return gpo.cache.path("runs", f"{bag.stem}-{config.method}-{config.route}", key, ".npz")
 
 
 @dataclass(frozen=True)

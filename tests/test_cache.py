@@ -1,0 +1,85 @@
+"""The one cache: one environment variable, one folder per kind, one key scheme, files renamed into place."""
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pooch
+import pytest
+
+from gpo import cache, datasets
+from gpo.ground import FloorImage, analytic_table
+from gpo.sim.record import fingerprint_sources
+from gpo.sim.rigs import t265_rig
+
+
+def test_the_folder_is_the_environment_variables_else_the_users_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path))
+    assert cache.root() == tmp_path
+    assert [cache.folder(kind) for kind in cache.KINDS] == [tmp_path / kind for kind in cache.KINDS]
+    monkeypatch.delenv("GPO_CACHE_DIR")
+    assert cache.root() == Path(pooch.os_cache("gpo"))
+    with pytest.raises(ValueError, match="unknown cache kind 'table'; the kinds are tables, recordings"):
+        cache.folder("table")
+
+
+def test_the_key_is_the_sha256_of_the_canonical_json_and_the_sources():
+    parts = ({"b": 1, "a": [0.5, "x"]}, "ros1")
+    expected = hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()[:16]
+    assert cache.key(*parts) == expected
+    assert cache.key({"a": [0.5, "x"], "b": 1}, "ros1") == expected  # the order of a dict's keys does not matter
+    assert cache.key({"b": 1, "a": [0.5, "x"]}, "ros2") != expected
+    sources = fingerprint_sources()
+    digest = hashlib.sha256(json.dumps(parts, sort_keys=True).encode())
+    for source in sources:
+        digest.update(source.read_bytes())
+    assert cache.key(*parts, sources=sources) == digest.hexdigest()[:16]
+
+
+def test_a_changed_source_changes_the_key(tmp_path):
+    source = tmp_path / "module.py"
+    source.write_text("A = 1\n")
+    before = cache.key("x", sources=[source])
+    source.write_text("A = 2\n")
+    assert cache.key("x", sources=[source]) != before
+
+
+def test_write_renames_a_complete_file_into_place_and_keeps_the_first(tmp_path):
+    target = cache.path("runs", "run", "0123456789abcdef", ".npz").relative_to(cache.root())
+    target = tmp_path / target
+    seen = []
+
+    def save(partial: Path) -> None:
+        seen.append(partial)
+        assert partial.parent == target.parent and partial != target and partial.suffix == ".npz"
+        np.savez(partial, value=np.arange(3))
+
+    assert cache.write(target, save) == target
+    assert [path.name for path in target.parent.iterdir()] == [target.name]
+    cache.write(target, lambda partial: np.savez(partial, value=np.arange(5)))  # another process, second
+    assert np.load(target)["value"].tolist() == [0, 1, 2]
+    assert [path.name for path in target.parent.iterdir()] == [target.name]
+
+
+def test_a_failed_write_leaves_nothing(tmp_path):
+    target = tmp_path / "runs" / "run-0123.npz"
+
+    def fail(partial: Path) -> None:
+        partial.write_text("half")
+        raise OSError("disk full")
+
+    with pytest.raises(OSError, match="disk full"):
+        cache.write(target, fail)
+    assert list(target.parent.iterdir()) == []
+
+
+def test_tables_and_downloads_live_under_the_one_variable(tmp_path, monkeypatch):
+    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("GPO_DATA_DIR", raising=False)
+    rig = t265_rig()
+    table = analytic_table(rig.camera, rig.mount, FloorImage.top_view(metres_per_pixel=4e-3))
+    assert [path.name for path in (tmp_path / "tables").iterdir()] == [f"table-{table.key}.npz"]
+    assert datasets.data_dir() == tmp_path / "datasets"
+    monkeypatch.setenv("GPO_DATA_DIR", str(tmp_path / "copies"))  # the real-data folder stays a folder of its own
+    assert datasets.data_dir() == tmp_path / "copies"
