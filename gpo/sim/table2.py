@@ -1,0 +1,216 @@
+"""The second paper's Table 2 over its experiments I-IX, reproduced on the simulated downward camera.
+
+Each experiment (``EXPERIMENTS``) is a recording of ``gpo.sim.record`` (``paper2-i`` ... ``paper2-ix``: a cart
+pushed at random over wood, the linear and rotational stages over the industrial floor, the omnidirectional AGV's
+81 m) and the way the paper took its ground truth, which decides the samples its metrics are computed at
+(``gpo.metrics.paper_table2``):
+
+- ``continuous``: motion capture (I-II): every frame;
+- ``steps``: the stage's position after each step, the images taken at rest (IV, V, VII): the odometer sees only
+  the frame in the middle of each rest, as the paper's camera did;
+- ``end``: the run's end alone (VI, VIII, and IX, whose ground markers gave only its final error).
+
+The paper's III (a raised-floor corridor with ground markers) has no recording here.
+
+A run (``experiment_run``) reads every frame of a long recording, up to a few minutes for IX; each is kept on disk
+under ``$GPO_CACHE_DIR/runs``, keyed by the recording, the frames used, the whole config and the source of every
+module a run goes through, so that ``python -m gpo.sim.table2`` computes them once (as ``python -m gpo table4``
+does for the first paper's table) and chapter 08 reads them back.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import hashlib
+import json
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+import gpo
+from gpo.bag import Recording
+from gpo.metrics import PaperTable2, evaluate, paper_table2
+from gpo.pipeline import OdometryConfig, config_to_dict, load_config, odometry
+from gpo.sim.motion import Stop, named_plan
+from gpo.sim.record import GROUND_TRUTH_TOPIC, START_NS, cache_dir, preset, recording
+from gpo.sim.rigs import RIGS
+from gpo.sim.table4 import RUN_MODULES
+from gpo.trajectory import Trajectory
+
+DOWNWARD_CONFIG = Path(gpo.__file__).parent / "configs" / "sim_downward.yaml"
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One of the paper's experiments: its ``number`` (I-IX), the ``preset`` recording, how its ground truth was
+    taken (``truth``: continuous, steps or end) and the paper's own row of Table 2 (``paper``; None where it
+    printed a dash)."""
+
+    number: str
+    preset: str
+    truth: str
+    paper: PaperTable2
+
+
+def _paper(distance, rmse, heading_rmse, final_mm, final_percent, final_heading, relative) -> PaperTable2:
+    return PaperTable2(distance, rmse, heading_rmse, final_mm, final_percent, final_heading, relative, 0)
+
+
+NONE = float("nan")  # the paper's dash
+EXPERIMENTS = (
+    Experiment("I", "paper2-i", "continuous", _paper(17.83, 56.3, 2.3, 109.8, 0.16, 3.4, 4.8)),
+    Experiment("II", "paper2-ii", "continuous", _paper(19.27, 56.5, 1.4, 114.7, 0.3, 0.9, 9.6)),
+    Experiment("IV", "paper2-iv", "steps", _paper(0.5, 0.49, NONE, 0.35, 0.07, NONE, 4.15)),
+    Experiment("V", "paper2-v", "steps", _paper(1.24, 5.27, NONE, 13.76, 0.22, NONE, 1.69)),
+    Experiment("VI", "paper2-vi", "end", _paper(3.18, NONE, NONE, 40.64, 1.18, NONE, 1.18)),
+    Experiment("VII", "paper2-vii", "steps", _paper(0.44, 2.84, 0.4, 4.01, 0.12, 0.72, 3.9)),
+    Experiment("VIII", "paper2-viii", "end", _paper(0.87, NONE, NONE, 7.07, 0.77, 0.67, 0.77)),
+    Experiment("IX", "paper2-ix", "end", _paper(80.21, NONE, NONE, 600.81, 0.94, NONE, 0.94)),
+)
+PAPER_III = _paper(14.48, 42.8, NONE, 80.7, 0.17, NONE, 0.8)  # the raised-floor corridor, not simulated here
+
+
+def experiment(number: str) -> Experiment:
+    """The experiment numbered ``number`` (I, II, IV ... IX)."""
+    for chosen in EXPERIMENTS:
+        if chosen.number == number:
+            return chosen
+    raise ValueError(f"unknown experiment {number!r}; the experiments are {', '.join(e.number for e in EXPERIMENTS)}")
+
+
+def published_config(base: OdometryConfig | None = None) -> OdometryConfig:
+    """The pipeline as published: the shipped downward config without the refit (the paper's fit alone)."""
+    base = base or load_config(DOWNWARD_CONFIG)
+    return base.replace(features=dataclasses.replace(base.features, refit_px=0.0))
+
+
+def rest_stamps_ns(chosen: Experiment) -> np.ndarray:
+    """The stamps (ns) of the middle of each rest of a stepped experiment's plan: where the paper took an image and
+    its ground truth."""
+    plan = named_plan(preset(chosen.preset).path)
+    bounds = plan.boundaries_s
+    middles = [(bounds[i] + bounds[i + 1]) / 2 for i, seg in enumerate(plan.segments) if isinstance(seg, Stop)]
+    return START_NS + np.round(np.array(middles) * 1e9).astype(np.int64)
+
+
+def _frames(bag: Path, chosen: Experiment) -> Iterator[tuple[int, np.ndarray]]:
+    """(stamp ns, grey image) of the frames the experiment's odometer sees: all, or one in the middle of each rest."""
+    rests = rest_stamps_ns(chosen) if chosen.truth == "steps" else None
+    half_period_ns = 0.5e9 / RIGS[preset(chosen.preset).rig]().rate_hz
+    with Recording(bag) as recorded:
+        for frame in recorded.frames(gray=True, progress=False):
+            if rests is None or np.abs(rests - frame.stamp_ns).min() <= half_period_ns:
+                yield frame.stamp_ns, frame.image
+
+
+@dataclass(frozen=True)
+class ExperimentRun:
+    """An experiment's estimated path of base_link (``trajectory``), the frames it used and its speed."""
+
+    trajectory: Trajectory
+    frames: int
+    frames_per_second: float
+
+
+def experiment_run(chosen: Experiment, config: OdometryConfig, cache: bool = True) -> ExperimentRun:
+    """The floor feature odometer's run over the experiment's frames with ``config``, read from the disk cache when
+    kept. Raises ValueError when the run stops early."""
+    bag = recording(chosen.preset, progress=False)
+    path = _run_path(bag, chosen, config)
+    if cache and path.exists():
+        with np.load(path) as kept:
+            poses = kept["poses"]
+            trajectory = Trajectory.from_planar(kept["stamps_ns"], *poses.T, frame_id="odom")
+            return ExperimentRun(trajectory, int(kept["frames"]), float(kept["frames_per_second"]))
+    result = odometry(_frames(bag, chosen), config, source=bag.name)
+    if result.error:
+        raise ValueError(f"{bag}: the run stopped early, {result.error}")
+    done = ExperimentRun(result.trajectory, len(result.records), result.frames_per_second)
+    if cache:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_name(f"{path.stem}-partial-{os.getpid()}.npz")
+        planar = np.column_stack([done.trajectory.positions[:, :2], done.trajectory.yaw])
+        stamps = done.trajectory.stamps_ns
+        np.savez(partial, stamps_ns=stamps, poses=planar, frames=done.frames, frames_per_second=done.frames_per_second)
+        partial.replace(path)
+    return done
+
+
+def _run_path(bag: Path, chosen: Experiment, config: OdometryConfig) -> Path:
+    digest = hashlib.sha256(json.dumps([bag.name, chosen.truth, config_to_dict(config)], sort_keys=True).encode())
+    package = Path(gpo.__file__).parent
+    for module in RUN_MODULES:
+        digest.update((package / module).read_bytes())
+    digest.update(Path(__file__).read_bytes())  # the frames chosen
+    return cache_dir() / "runs" / f"{bag.stem}-{chosen.truth}-{digest.hexdigest()[:12]}.npz"
+
+
+@dataclass(frozen=True)
+class Table2Row:
+    """An experiment run under the paper's definitions (``paper``) and the suite's relative error (RPE per metre,
+    %; None when the truth travels less than a metre)."""
+
+    experiment: Experiment
+    paper: PaperTable2
+    rpe_percent: float | None
+    frames: int
+    frames_per_second: float
+
+
+def table2_row(chosen: Experiment, config: OdometryConfig, cache: bool = True) -> Table2Row:
+    """The experiment's run with ``config`` against its ground truth, sampled as the paper's was."""
+    run = experiment_run(chosen, config, cache)
+    with Recording(recording(chosen.preset, progress=False)) as recorded:
+        truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
+    samples = {"continuous": None, "steps": rest_stamps_ns(chosen), "end": np.zeros(0, np.int64)}[chosen.truth]
+    measured = paper_table2(run.trajectory, truth, samples)
+    return Table2Row(chosen, measured, evaluate(run.trajectory, truth).relative_error_percent, run.frames,
+                     run.frames_per_second)
+
+
+def reproduce_table2(configs: dict[str, OdometryConfig] | None = None, experiments=EXPERIMENTS, cache: bool = True):
+    """``{name: [Table2Row per experiment]}`` for each config (default: the pipeline as published and as shipped)."""
+    if configs is None:
+        shipped = load_config(DOWNWARD_CONFIG)
+        configs = {"as published": published_config(shipped), "shipped": shipped}
+    return {name: [table2_row(chosen, config, cache) for chosen in experiments] for name, config in configs.items()}
+
+
+HEADER = (
+    f"{'':14}{'distance':>9}{'position':>10}{'heading':>9}{'final error':>16}{'final':>9}{'relative':>10}\n"
+    f"{'':14}{'[m]':>9}{'RMSE[mm]':>10}{'RMSE[°]':>9}{'[mm]':>9}{'[%]':>7}{'head.[°]':>9}{'error[%]':>10}"
+)
+
+
+def _number(value: float, width: int, digits: int) -> str:
+    return f"{'-':>{width}}" if value is None or np.isnan(value) else f"{value:{width}.{digits}f}"
+
+
+def format_row(label: str, row: PaperTable2) -> str:
+    """One line of Table 2 in the paper's column order ('-' for what is not given)."""
+    return (
+        f"{label:14}{_number(row.distance_m, 9, 2)}{_number(row.positioning_rmse_mm, 10, 2)}"
+        f"{_number(row.heading_rmse_deg, 9, 2)}{_number(row.final_error_mm, 9, 2)}"
+        f"{_number(row.final_error_percent, 7, 2)}{_number(row.final_heading_deg, 9, 2)}"
+        f"{_number(row.relative_error_percent, 10, 2)}"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description="Compute and keep the runs of the second paper's Table 2.")
+    parser.add_argument("experiments", nargs="*", default=[e.number for e in EXPERIMENTS], help="I, II, IV ... IX")
+    args = parser.parse_args()
+    chosen = [experiment(number) for number in args.experiments]
+    for name, rows in reproduce_table2(experiments=chosen).items():
+        print(name)
+        print(HEADER)
+        for row in rows:
+            print(format_row(row.experiment.number, row.paper))
+
+
+if __name__ == "__main__":
+    main()
