@@ -435,7 +435,7 @@ def _printed_matrix(theta, tx, ty) -> np.ndarray:
 
 
 def _grid_points(count, seed) -> np.ndarray:
-    """``count`` points on a jittered 12 px grid: no two closer than 4 px, so that no loop side is too short to judge."""
+    """``count`` points on a jittered 12 px grid, no two closer than 4 px: no loop side too short to judge."""
     rng = np.random.default_rng(seed)
     cells = rng.choice(25 * 25, count, replace=False)
     return np.column_stack([cells % 25, cells // 25]) * 12.0 + rng.uniform(-4, 4, (count, 2)) + 20.0
@@ -450,9 +450,9 @@ def test_eq_2_by_hand_decides_every_loop_of_algorithm_1():
     check = invariance_check(start, end, threshold=0.85, cardinality=4, rounds=3, rng=np.random.default_rng(0))
     for loop, kept in zip(check.loops, check.kept_loops, strict=True):
         closed = np.append(loop, loop[0])  # p_1 -> ... -> p_C -> p_1
-        l = np.linalg.norm(np.diff(start[closed], axis=0), axis=1)
+        sides = np.linalg.norm(np.diff(start[closed], axis=0), axis=1)
         l_hat = np.linalg.norm(np.diff(end[closed], axis=0), axis=1)
-        count = np.sum(np.minimum(l, l_hat) / np.maximum(l, l_hat) >= 0.85)  # Algorithm 1, lines 8-11
+        count = np.sum(np.minimum(sides, l_hat) / np.maximum(sides, l_hat) >= 0.85)  # Algorithm 1, lines 8-11
         assert kept == (count == 4)  # line 12: Count == C
     union = np.zeros(60, bool)
     union[np.concatenate([loop for loop, kept in zip(check.loops, check.kept_loops, strict=True) if kept])] = True
