@@ -16,7 +16,8 @@ A run (``experiment_run``) reads every frame of a long recording, up to a few mi
 under ``$GPO_CACHE_DIR/runs``, keyed by the recording (whose name holds the simulator's fingerprint, so the rests
 of a stepped plan too), the frames used (all or at rest), the whole config and the source of every module a run
 goes through, so that ``python -m gpo.sim.table2`` computes them once (as ``python -m gpo table4``
-does for the first paper's table) and chapter 08 reads them back.
+does for the first paper's table) and chapter 08 reads them back; it also keeps chapter 08's runs over the three
+floors (``floor_runs``).
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ from gpo.pipeline import OdometryConfig, config_to_dict, load_config, odometry
 from gpo.sim.motion import Stop, named_plan
 from gpo.sim.record import GROUND_TRUTH_TOPIC, START_NS, cache_dir, preset, recording
 from gpo.sim.rigs import RIGS
-from gpo.sim.table4 import RUN_MODULES
+from gpo.sim.table4 import RUN_MODULES, FloorRun, floor_run
 from gpo.trajectory import Trajectory
 
 DOWNWARD_CONFIG = Path(gpo.__file__).parent / "configs" / "sim_downward.yaml"
@@ -200,10 +201,25 @@ def format_row(label: str, row: PaperTable2) -> str:
     )
 
 
+FLOORS = {"wood": "downward-wood", "raised": "downward-raised", "industrial": "downward-industrial"}
+
+
+def floor_runs(base: OdometryConfig | None = None) -> dict[str, FloorRun]:
+    """Chapter 08's runs of the shipped config over the three floors' recordings (``FLOORS``), and over the
+    industrial floor with SIFT's usual contrast threshold (0.04, OpenCV's default: ``"industrial, threshold 0.04"``),
+    each kept on disk by ``gpo.sim.table4.floor_run``."""
+    base = base or load_config(DOWNWARD_CONFIG)
+    usual = base.replace(features=dataclasses.replace(base.features, contrast_threshold=0.04))
+    runs = {kind: floor_run(recording(name, progress=False), base) for kind, name in FLOORS.items()}
+    runs["industrial, threshold 0.04"] = floor_run(recording(FLOORS["industrial"], progress=False), usual)
+    return runs
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description="Compute and keep the runs of the second paper's Table 2.")
     parser.add_argument("experiments", nargs="*", default=[e.number for e in EXPERIMENTS], help="I, II, IV ... IX")
     args = parser.parse_args()
+    floor_runs()  # chapter 08's runs over the three floors
     chosen = [experiment(number) for number in args.experiments]
     for name, rows in reproduce_table2(experiments=chosen).items():
         print(name)
