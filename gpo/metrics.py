@@ -408,8 +408,9 @@ def paper_table2(
 ) -> PaperTable2:
     """``PaperTable2`` of ``estimate`` against ``truth`` at the ground-truth samples nearest to ``samples_ns`` (stamps,
     ns; None: every pose the two share, i.e. a continuous ground truth, segment by segment). The first and last
-    associated poses are always samples: the paper's final error is the run's end. Raises ValueError as
-    ``evaluate`` does, or when the samples give no segment that moves."""
+    associated poses are always samples: the paper's final error is the run's end. With those two alone the RMSEs
+    are NaN, as the paper prints a dash there. Raises ValueError as ``evaluate`` does, or when the samples give no
+    segment that moves."""
     evaluation = evaluate(estimate, truth, Alignment.ORIGIN, RPE_DELTA_M, max_difference_s)
     stamps = evaluation.truth.stamps_ns
     chosen = np.arange(len(stamps))
@@ -429,10 +430,11 @@ def paper_table2(
         raise ValueError("the ground truth never moves between its samples: no relative positioning error")
     step_errors = np.hypot(*(estimated_steps - true_steps)[moving].T) / travelled[moving]
     final = evaluation.final
+    between_ends = len(chosen) > 2  # the start lies on the truth by construction: its end alone makes no RMSE
     return PaperTable2(
         distance_m=final.distance_m,
-        positioning_rmse_mm=float(1e3 * np.sqrt(np.mean(errors**2))),
-        heading_rmse_deg=float(np.degrees(np.sqrt(np.mean(headings**2)))),
+        positioning_rmse_mm=float(1e3 * np.sqrt(np.mean(errors**2))) if between_ends else float("nan"),
+        heading_rmse_deg=float(np.degrees(np.sqrt(np.mean(headings**2)))) if between_ends else float("nan"),
         final_error_mm=1e3 * final.position_m,
         final_error_percent=final.percent,
         final_heading_deg=float(np.degrees(abs(final.heading_rad))),

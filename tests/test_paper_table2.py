@@ -39,6 +39,7 @@ def test_with_the_end_alone_the_relative_error_is_the_final_error_in_percent():
                                      np.zeros(len(STAMPS)), frame_id="odom")
     row = paper_table2(shifted, truth, samples_ns=np.zeros(0, np.int64))
     assert row.samples == 2
+    assert np.isnan(row.positioning_rmse_mm) and np.isnan(row.heading_rmse_deg)  # the paper's dashes
     assert row.relative_error_percent == pytest.approx(row.final_error_percent)
     assert row.final_error_percent == pytest.approx(0.4)
 
