@@ -112,11 +112,13 @@ def _frames(bag: Path, chosen: Experiment) -> Iterator[tuple[int, np.ndarray]]:
 
 @dataclass(frozen=True)
 class ExperimentRun:
-    """An experiment's estimated path of base_link (``trajectory``), the frames it used and its speed."""
+    """An experiment's estimated path of base_link (``trajectory``), the frames it used, its speed and the
+    recording's ground truth (``truth``, base_link in world, kept with the run so that it is read once)."""
 
     trajectory: Trajectory
     frames: int
     frames_per_second: float
+    truth: Trajectory
 
 
 DETECTION_FIELDS = ("detector", "max_features", "contrast_threshold", "fast_threshold", "scale", "roi")
@@ -130,6 +132,7 @@ def experiment_runs(chosen: Experiment, configs: dict[str, OdometryConfig], cach
     bag = recording(chosen.preset, progress=False)
     paths = {name: _run_path(bag, chosen, config) for name, config in configs.items()}
     runs = {name: _load(path) for name, path in paths.items() if cache and path.exists()}
+    runs = {name: run for name, run in runs.items() if run is not None}
     missing = {name: config for name, config in configs.items() if name not in runs}
     groups: dict[tuple, dict[str, OdometryConfig]] = {}
     for name, config in missing.items():
@@ -156,6 +159,8 @@ def _run_together(bag: Path, chosen: Experiment, configs: dict[str, OdometryConf
     records = {name: [] for name in configs}
     seconds = dict.fromkeys(configs, 0.0)
     detecting = 0.0
+    with Recording(bag) as recorded:
+        truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
     for stamp_ns, image in _frames(bag, chosen):
         started = time.perf_counter()
         keypoints = detector.keypoints(image)
@@ -169,24 +174,35 @@ def _run_together(bag: Path, chosen: Experiment, configs: dict[str, OdometryConf
             OdometryResult(records[name], detecting + seconds[name], configs[name], bag.name, "").trajectory,
             len(records[name]),
             len(records[name]) / (detecting + seconds[name]),
+            truth,
         )
         for name in configs
     }
 
 
-def _load(path: Path) -> ExperimentRun:
+def _load(path: Path) -> ExperimentRun | None:
+    """The kept run, or None when the file holds no ground truth (kept before it did)."""
     with np.load(path) as kept:
-        poses = kept["poses"]
-        trajectory = Trajectory.from_planar(kept["stamps_ns"], *poses.T, frame_id="odom")
-        return ExperimentRun(trajectory, int(kept["frames"]), float(kept["frames_per_second"]))
+        if "truth_poses" not in kept:
+            return None
+        trajectory = Trajectory.from_planar(kept["stamps_ns"], *kept["poses"].T, frame_id="odom")
+        truth = Trajectory.from_planar(kept["truth_stamps_ns"], *kept["truth_poses"].T)
+        return ExperimentRun(trajectory, int(kept["frames"]), float(kept["frames_per_second"]), truth)
 
 
 def _save(path: Path, run: ExperimentRun) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f"{path.stem}-partial-{os.getpid()}.npz")
-    planar = np.column_stack([run.trajectory.positions[:, :2], run.trajectory.yaw])
-    stamps = run.trajectory.stamps_ns
-    np.savez(partial, stamps_ns=stamps, poses=planar, frames=run.frames, frames_per_second=run.frames_per_second)
+    planar, truth = (np.column_stack([t.positions[:, :2], t.yaw]) for t in (run.trajectory, run.truth))
+    np.savez(
+        partial,
+        stamps_ns=run.trajectory.stamps_ns,
+        poses=planar,
+        frames=run.frames,
+        frames_per_second=run.frames_per_second,
+        truth_stamps_ns=run.truth.stamps_ns,
+        truth_poses=truth,
+    )
     partial.replace(path)
 
 
@@ -213,14 +229,12 @@ class Table2Row:
 def table2_rows(chosen: Experiment, configs: dict[str, OdometryConfig], cache: bool = True) -> dict[str, Table2Row]:
     """The experiment's run with each of ``configs`` against its ground truth, sampled as the paper's was."""
     runs = experiment_runs(chosen, configs, cache)
-    with Recording(recording(chosen.preset, progress=False)) as recorded:
-        truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
     samples = {"continuous": None, "steps": rest_stamps_ns(chosen), "end": np.zeros(0, np.int64)}[chosen.truth]
     return {
         name: Table2Row(
             chosen,
-            paper_table2(run.trajectory, truth, samples),
-            evaluate(run.trajectory, truth).relative_error_percent,
+            paper_table2(run.trajectory, run.truth, samples),
+            evaluate(run.trajectory, run.truth).relative_error_percent,
             run.frames,
             run.frames_per_second,
         )
