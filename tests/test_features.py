@@ -424,3 +424,83 @@ def test_bad_images_are_refused_clearly():
 def test_bad_parameters_name_the_field(field, value):
     with pytest.raises(FeatureError, match=f"^{field} must be"):
         dataclasses.replace(FeatureParameters(), **{field: value})
+
+
+# ------------------------------------------------------------ the paper's printed formulas, computed here by hand
+
+
+def _printed_matrix(theta, tx, ty) -> np.ndarray:
+    """Eq. 3's matrix as printed: [[cos θ, -sin θ, Tx], [sin θ, cos θ, Ty], [0, 0, 1]]."""
+    return np.array([[np.cos(theta), -np.sin(theta), tx], [np.sin(theta), np.cos(theta), ty], [0.0, 0.0, 1.0]])
+
+
+def _grid_points(count, seed) -> np.ndarray:
+    """``count`` points on a jittered 12 px grid, no two closer than 4 px: no loop side too short to judge."""
+    rng = np.random.default_rng(seed)
+    cells = rng.choice(25 * 25, count, replace=False)
+    return np.column_stack([cells % 25, cells // 25]) * 12.0 + rng.uniform(-4, 4, (count, 2)) + 20.0
+
+
+def test_eq_2_by_hand_decides_every_loop_of_algorithm_1():
+    """min(l_i, l^_i) / max(l_i, l^_i) >= t for i = 1..C, each side of each closed loop, computed here."""
+    rng = np.random.default_rng(3)
+    start = _grid_points(60, 3)
+    end = (_printed_matrix(0.05, 7.0, -3.0) @ np.column_stack([start, np.ones(60)]).T).T[:, :2]
+    end[:12] += rng.uniform(-25, 25, (12, 2))  # twelve wrong matches
+    check = invariance_check(start, end, threshold=0.85, cardinality=4, rounds=3, rng=np.random.default_rng(0))
+    for loop, kept in zip(check.loops, check.kept_loops, strict=True):
+        closed = np.append(loop, loop[0])  # p_1 -> ... -> p_C -> p_1
+        sides = np.linalg.norm(np.diff(start[closed], axis=0), axis=1)
+        l_hat = np.linalg.norm(np.diff(end[closed], axis=0), axis=1)
+        count = np.sum(np.minimum(sides, l_hat) / np.maximum(sides, l_hat) >= 0.85)  # Algorithm 1, lines 8-11
+        assert kept == (count == 4)  # line 12: Count == C
+    union = np.zeros(60, bool)
+    union[np.concatenate([loop for loop, kept in zip(check.loops, check.kept_loops, strict=True) if kept])] = True
+    np.testing.assert_array_equal(check.kept, union)  # lines 13 and 17: KS_out holds every kept loop's points
+    assert not check.kept_loops.all() and check.kept[12:].mean() > 0.9
+
+
+def test_the_histogram_bands_are_mu_plus_minus_sigma_of_the_distribution():
+    """The paper keeps what lies within (mu - sigma, mu + sigma) of each histogram: here mu and sigma by hand, of
+    the orientations then of the kept lengths, against the filter's (its binned values: within half a bin)."""
+    rng = np.random.default_rng(4)
+    start = rng.uniform(0, 300, (200, 2))
+    angle = np.radians(np.concatenate([35 + rng.normal(0, 4, 180), rng.uniform(-180, 180, 20)]))
+    length = np.concatenate([20 + rng.normal(0, 2, 180), rng.uniform(5, 60, 20)])
+    end = start + length[:, None] * np.column_stack([np.cos(angle), np.sin(angle)])
+    kept, orientation, lengths = histogram_filter(start, end, orientation_bins=180, length_bins=160)
+    degrees = orientation.values  # each vector's direction atan2(d_v, d_u), unwrapped about the histogram's centre
+    np.testing.assert_allclose(np.exp(1j * np.radians(degrees)), np.exp(1j * angle), atol=1e-9)
+    inside = np.abs(degrees - orientation.mean) <= 90
+    assert orientation.mean == pytest.approx(degrees[inside].mean(), abs=0.5)  # one-degree bins
+    assert orientation.sigma == pytest.approx(degrees[inside].std(), abs=0.5)
+    by_orientation = np.abs(degrees - orientation.mean) <= orientation.sigma
+    np.testing.assert_array_equal(orientation.kept, by_orientation)
+    among = length[by_orientation]
+    half_bin = 0.5 * (among.max() - among.min()) / 160
+    assert lengths.mean == pytest.approx(among.mean(), abs=half_bin)
+    assert lengths.sigma == pytest.approx(among.std(), abs=2 * half_bin)
+    np.testing.assert_array_equal(kept, by_orientation & (np.abs(length - lengths.mean) <= lengths.sigma))
+
+
+@pytest.mark.parametrize(("theta", "tx", "ty"), [(0.02, 0.011, -0.004), (-0.3, -0.02, 0.05), (0.0, 0.0, 0.01)])
+def test_eq_3_as_printed_is_the_suites_increment(theta, tx, ty):
+    """Target keypoints (the first image) = A x source keypoints (the second), eq. 3; the suite's increment from
+    the previous frame's points to the current frame's is the same (Tx, Ty, theta)."""
+    source = np.random.default_rng(5).uniform(-0.15, 0.15, (40, 2))  # metres, the current frame
+    target = (_printed_matrix(theta, tx, ty) @ np.column_stack([source, np.ones(40)]).T).T[:, :2]  # the previous
+    angle, shift = rigid_fit(source, target)
+    np.testing.assert_allclose([angle, *shift], [theta, tx, ty], atol=1e-12)
+    np.testing.assert_allclose(increment_from_point_pairs(target, source), [tx, ty, theta], atol=1e-12)
+
+
+def test_eq_4_composes_the_printed_matrices():
+    """A_i^0 = A_1^0 A_2^1 ... A_i^(i-1) by matrix products here, against the suite's composition of increments."""
+    from gpo.kinematics import integrate
+
+    increments = np.random.default_rng(6).normal([0.01, 0.002, 0.01], [0.005, 0.003, 0.02], (30, 3))
+    product = np.eye(3)
+    for dx, dy, dtheta in increments:
+        product = product @ _printed_matrix(dtheta, dx, dy)
+    final = integrate(increments)[-1]
+    np.testing.assert_allclose(product, _printed_matrix(final[2], final[0], final[1]), atol=1e-12)

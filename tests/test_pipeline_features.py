@@ -85,3 +85,40 @@ def test_features_config_round_trip_and_its_rules(tmp_path):
     (tmp_path / "bad.yaml").write_text(text)
     with pytest.raises(ValueError, match="features: refit_px"):
         load_config(tmp_path / "bad.yaml")
+
+
+# ------------------------------------------------------------------ the second paper's experiments (gpo.sim.table2)
+
+
+def test_a_stepped_experiment_sees_one_frame_in_the_middle_of_each_rest():
+    """IV: 50 steps of 10 mm; the paper's camera took an image at each rest, and so does the odometer here."""
+    from gpo.sim.motion import named_plan
+    from gpo.sim.record import START_NS
+    from gpo.sim.table2 import experiment, rest_stamps_ns
+
+    chosen = experiment("IV")
+    rests = rest_stamps_ns(chosen)
+    assert len(rests) == 51
+    plan = named_plan("stage-iv")
+    still = plan.sample((rests - START_NS) / 1e9)
+    np.testing.assert_allclose(still.v, 0.0, atol=1e-12)
+    np.testing.assert_allclose(np.diff(still.x), 0.010, atol=1e-9)  # one step between consecutive rests
+
+
+def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
+    """Against the stage's truth at each rest, under the paper's definitions: the paper's IV ends 0.35 mm off."""
+    from gpo.sim.table2 import experiment, table2_row
+
+    row = table2_row(experiment("IV"), load_config(CONFIG), cache=False)
+    assert row.frames == 51
+    assert row.paper.samples == 51
+    assert row.paper.distance_m == pytest.approx(0.5, abs=1e-3)
+    assert row.paper.final_error_mm < 2.0 and row.paper.positioning_rmse_mm < 2.0
+    assert row.paper.relative_error_percent < 10.0  # per 10 mm step
+
+
+def test_unknown_experiments_are_named():
+    from gpo.sim.table2 import experiment
+
+    with pytest.raises(ValueError, match="the experiments are I, II, IV"):
+        experiment("III")

@@ -10,13 +10,17 @@ from scipy.integrate import quad
 from scipy.spatial.transform import Rotation
 
 from gpo.sim.motion import (
+    DEFAULT_LIMITS,
     NO_DRIFT,
+    PAPER_TURN_RATE_RADPS,
+    PATH_LIMITS,
     PATHS,
     Arc,
     Bend,
     MotionLimits,
     MotionPlan,
     SCurve,
+    Slide,
     Spin,
     Stop,
     Straight,
@@ -164,12 +168,14 @@ def test_the_robot_keeps_rolling_only_where_curvature_and_direction_allow():
 
 @pytest.mark.parametrize("name", list(PATHS))
 def test_speeds_accelerations_and_jerks_stay_within_the_limits(name):
-    limits = MotionLimits()
+    limits = PATH_LIMITS.get(name, MotionLimits())
     plan = named_plan(name)
     step = 1e-3
     times = np.arange(0.0, plan.duration_s, step)
     state = plan.sample(times)
+    along_path = np.hypot(state.accel, np.gradient(state.lateral, step))
     assert np.abs(state.accel).max() <= limits.accel_mps2 * (1 + 1e-9)
+    assert along_path.max() <= limits.accel_mps2 * (1 + 1e-3)
     assert np.abs(np.diff(state.accel) / step).max() <= limits.jerk_mps3 * (1 + 1e-6)
     for index, segment in enumerate(plan.segments):
         inside = (times >= plan.boundaries_s[index]) & (times <= plan.boundaries_s[index + 1])
@@ -177,7 +183,8 @@ def test_speeds_accelerations_and_jerks_stay_within_the_limits(name):
             assert np.abs(state.omega[inside]).max() <= segment.rate_radps * (1 + 1e-9)
             assert np.abs(state.angular_accel[inside]).max() <= limits.angular_accel_radps2 * (1 + 1e-9)
         elif not isinstance(segment, Stop):
-            assert np.abs(state.v[inside]).max() <= abs(segment.speed_mps) * (1 + 1e-9)
+            speed = np.hypot(state.v[inside], state.lateral[inside])
+            assert speed.max() <= abs(segment.speed_mps) * (1 + 1e-9)
 
 
 def test_sampling_outside_the_plan_names_the_range():
@@ -304,6 +311,9 @@ def test_yaw_drift_turns_about_the_floor_normal_only():
 LENGTHS_M = {"sample": (3, 5), "test": (0.5, 1.5), "downward": (9, 11), "downward-short": (4, 5)}
 LENGTHS_M |= {"downward-long": (16, 17)}
 LENGTHS_M |= {f"short{i}": (2, 5) for i in (1, 2, 3)} | {f"long{i}": (12, 17) for i in (1, 2, 3)}
+LENGTHS_M |= {"cart-i": (17.8, 18.8), "cart-ii": (19.2, 20.2), "stage-iv": (0.5, 0.5 + 1e-9)}  # the second paper's
+LENGTHS_M |= {"stage-v": (1.24, 1.24 + 1e-9), "stage-vi": (3.18, 3.18 + 1e-9), "agv-ix": (80, 81)}
+LENGTHS_M |= {"rotation-vii": (0.43, 0.44), "rotation-viii": (0.86, 0.88)}
 
 
 @pytest.mark.parametrize("name", list(PATHS))
@@ -382,3 +392,80 @@ def test_random_plans_are_continuous_finite_and_end_at_rest(plan_segments):
         np.testing.assert_allclose(getattr(after, field), getattr(before, field), atol=1e-5, err_msg=field)
     end = plan.sample(plan.duration_s)
     assert end.v[0] == pytest.approx(0.0, abs=1e-9) and end.omega[0] == pytest.approx(0.0, abs=1e-9)
+
+
+# ------------------------------------------------------------------- the omnidirectional robot's slides
+
+
+@pytest.mark.parametrize(("forward", "left"), [(0.0, 1.2), (0.8, -0.6), (-0.5, 0.0)])
+def test_a_slide_moves_in_a_straight_line_across_the_heading_without_turning(forward, left):
+    plan = MotionPlan([Slide(forward, left, 0.5)], START)
+    np.testing.assert_allclose(end_pose(plan), in_start_frame(START, (forward, left, 0.0)), atol=1e-9)
+    assert plan.distance_m == pytest.approx(np.hypot(forward, left))
+    state = plan.sample(np.linspace(0.0, plan.duration_s, 50))
+    np.testing.assert_allclose(state.yaw, START[2], atol=1e-12)
+    # every sample on the segment's line: its offset from the start is parallel to (forward, left) turned by yaw
+    direction = in_start_frame((0.0, 0.0, START[2]), (forward, left, 0.0))[:2]
+    offsets = np.column_stack([state.x - START[0], state.y - START[1]])
+    np.testing.assert_allclose(offsets[:, 0] * direction[1] - offsets[:, 1] * direction[0], 0.0, atol=1e-9)
+
+
+def test_holonomic_kinematics_by_numerical_derivatives():
+    """ẋ = v cos θ - v_y sin θ, ẏ = v sin θ + v_y cos θ along a plan that slides sideways and diagonally."""
+    plan = MotionPlan([Straight(1.0), Slide(0.0, 0.7), Spin(1.0), Slide(0.4, -0.5), Bend(0.8, 1.2)], START)
+    step = 1e-4
+    times = np.linspace(step, plan.duration_s - step, 3001)
+    state, ahead, behind = plan.sample(times), plan.sample(times + step), plan.sample(times - step)
+    x_rate = (ahead.x - behind.x) / (2 * step)
+    y_rate = (ahead.y - behind.y) / (2 * step)
+    np.testing.assert_allclose(x_rate, state.v * np.cos(state.yaw) - state.lateral * np.sin(state.yaw), atol=1e-7)
+    np.testing.assert_allclose(y_rate, state.v * np.sin(state.yaw) + state.lateral * np.cos(state.yaw), atol=1e-7)
+    assert np.abs(state.lateral).max() > 0.3  # the slides do slide
+
+
+def test_a_slide_of_nothing_is_named():
+    with pytest.raises(ValueError, match=r"Slide\.forward_m and Slide\.left_m"):
+        Slide(0.0, 0.0)
+
+
+# --------------------------------------------------------------- the second paper's experiments I-IX
+
+
+@pytest.mark.parametrize("name", ["cart-i", "cart-ii", "rotation-viii", "agv-ix"])
+def test_the_experiments_turn_no_faster_than_the_papers_fastest_rotation(name):
+    plan = named_plan(name)
+    state = plan.sample(np.arange(0.0, plan.duration_s, 2e-3))
+    assert np.abs(state.omega).max() <= PAPER_TURN_RATE_RADPS * (1 + 1e-6)
+
+
+def test_the_rotational_stage_turns_the_camera_on_its_arm():
+    """VII: 90 degrees clockwise in 1 degree steps; VIII: 180 degrees: the camera stays on a circle about the axis."""
+    for name, turned, travelled in (("rotation-vii", -np.pi / 2, 0.435), ("rotation-viii", np.pi, 0.870)):
+        plan = named_plan(name)
+        state = plan.sample(np.linspace(0.0, plan.duration_s, 400))
+        centre = np.array([0.0, np.sign(turned) * 0.277])  # the axis, on base_link's left (counter-clockwise) or right
+        np.testing.assert_allclose(np.hypot(state.x - centre[0], state.y - centre[1]), 0.277, atol=1e-9)
+        assert state.yaw[-1] == pytest.approx(turned)
+        assert plan.distance_m == pytest.approx(travelled, abs=1e-3)
+
+
+def test_the_agv_slides_sideways_and_diagonally_and_returns_to_its_start():
+    plan = named_plan("agv-ix")
+    kinds = {type(segment) for segment in plan.segments}
+    assert {Straight, Spin, Slide} <= kinds
+    assert any(s.forward_m == 0 for s in plan.segments if isinstance(s, Slide))
+    assert any(s.forward_m != 0 and s.left_m != 0 for s in plan.segments if isinstance(s, Slide))
+    np.testing.assert_allclose(end_pose(plan), (0.0, 0.0, 0.0), atol=1e-9)
+
+
+def test_the_random_cart_stays_in_its_room_and_repeats_with_its_seed():
+    plan = named_plan("cart-i")
+    state = plan.sample(np.linspace(0.0, plan.duration_s, 5000))
+    assert np.abs(state.x).max() <= 2.0 + 1e-9 and np.abs(state.y).max() <= 1.75 + 1e-9
+    assert named_plan("cart-i").segments == plan.segments
+    assert named_plan("cart-ii").segments != plan.segments
+
+
+def test_stage_paths_use_their_own_limits_and_others_the_default():
+    assert named_plan("stage-iv").limits == PATH_LIMITS["stage-iv"]
+    assert named_plan("long1").limits == DEFAULT_LIMITS

@@ -257,3 +257,23 @@ def test_panel_detects_once_per_detector(frames, monkeypatch):
     controls["detector"].value = "sift"
     controls["detector"].value = "orb"
     assert detected == ["sift", "sift", "orb", "orb"]
+
+
+def test_the_histogram_decisions_are_drawn_by_band_and_scaled(frames):
+    from gpo.plots import draw_histogram_decisions
+
+    matches = _matches(frames, **NOISY)
+    orientation, length = matches.histogram
+    ax = draw_histogram_decisions(frames[1], matches, scale=4.0, centre_px=(160.0, 120.0))
+    drawn = _lines_by_colour(ax)
+    start, end = matches.matched
+    for colour, chosen in (
+        ("tab:red", ~orientation.kept),
+        ("tab:orange", orientation.kept & ~length.kept),
+        ("tab:green", length.kept),
+    ):
+        tips = start[chosen] + 4 * (end - start)[chosen]
+        np.testing.assert_allclose(drawn[colour], np.stack([start[chosen], tips], axis=1))
+    assert "centre of rotation" in {text.get_text() for text in ax.get_legend().get_texts()}
+    far = draw_histogram_decisions(frames[1], matches, centre_px=(900.0, 120.0))
+    assert "towards the centre of rotation, 740 px away" in {text.get_text() for text in far.get_legend().get_texts()}

@@ -1,16 +1,20 @@
 """How the simulated robot moves: motion plans with smooth speed profiles, their exact ground truth,
 and the drifting odometry a tracking camera (like an Intel RealSense T265) reports along them.
 
+This module is over 600 lines because it holds both the segment kinematics and the named paths every
+recording drives (the first paper's tests and the second paper's experiments I-IX).
+
 Frames and units (REP-103/105)
 ------------------------------
 ``world`` is fixed, z up, the floor is z = 0. ``base_link`` is the robot: origin at the rear-axle
 centre on the floor, x forward, y left, z up. The planar state is the pose (x, y, θ) of base_link in
 world (metres, radians; θ is the yaw, unwrapped, so it may leave (-π, π]), the speed v along base x
-(m/s, negative in reverse) and the turn rate ω about z (rad/s, positive counter-clockwise).
+(m/s, negative in reverse), the speed v_y along base y (m/s; zero except in a ``Slide``) and the turn
+rate ω about z (rad/s, positive counter-clockwise).
 
-Kinematics (unicycle, as a differential-drive pallet robot moves)::
+Kinematics (unicycle, as a differential-drive pallet robot moves; an omnidirectional robot also slides)::
 
-    ẋ = v cos θ,    ẏ = v sin θ,    θ̇ = ω
+    ẋ = v cos θ - v_y sin θ,    ẏ = v sin θ + v_y cos θ,    θ̇ = ω
 
 A path segment is a curve of curvature κ(s) = dθ/ds over the signed arc length s from its start
 (s < 0 in reverse). Following it at v = ṡ gives ω = κ v and ω̇ = κ a + (dκ/ds) v², a = v̇.
@@ -23,6 +27,7 @@ Segments
 ``Bend(angle_rad, length_m, speed_mps)``   smooth turn, curvature rising and falling to zero; reverse: ``speed_mps < 0``
 ``SCurve(length_m, offset_m, speed_mps)``  smooth lane change ``offset_m`` to the left; reverse: ``speed_mps < 0``
 ``Spin(angle_rad, rate_radps)``            turn on the spot about base_link's origin (v = 0)
+``Slide(forward_m, left_m, speed_mps)``    omnidirectional: move in a straight line sideways or diagonally, heading held
 ``Stop(duration_s)``                       stand still
 =========================================  ==================================================================
 
@@ -262,11 +267,12 @@ class _PathSegment:
         return _speed_profile(v_in, self.cruise_mps, v_out, self.path_length_m, limits.accel_mps2, limits.jerk_mps3)
 
     def motion(self, q, q_dot, q_ddot):
-        """Local (x, y, θ), v, ω, a, ω̇ after progress q (m, unsigned) at rate q̇ and q̈: s = ±q, ω = κv, ω̇ = κa + κ'v²."""
+        """Local (x, y, θ), v, ω, a, ω̇, v_y after progress q (m, unsigned) at rate q̇ and q̈: s = ±q, ω = κv,
+        ω̇ = κa + κ'v², v_y = 0."""
         s, v, a = self.direction * q, self.direction * q_dot, self.direction * q_ddot
         x, y, yaw = self.local_pose(s)
         kappa, dkappa = self.curvature(s)
-        return x, y, yaw, v, kappa * v, a, kappa * a + dkappa * v**2
+        return x, y, yaw, v, kappa * v, a, kappa * a + dkappa * v**2, np.zeros_like(q)
 
 
 @dataclass(frozen=True)
@@ -458,7 +464,7 @@ class Spin:
     def motion(self, q, q_dot, q_ddot):
         turn = math.copysign(1.0, self.angle_rad)
         zero = np.zeros_like(q)
-        return zero, zero, turn * q, zero, turn * q_dot, zero, turn * q_ddot
+        return zero, zero, turn * q, zero, turn * q_dot, zero, turn * q_ddot, zero
 
 
 @dataclass(frozen=True)
@@ -475,10 +481,41 @@ class Stop:
 
     def motion(self, q, q_dot, q_ddot):
         zero = np.zeros_like(q)
-        return (zero,) * 7
+        return (zero,) * 8
 
 
-Segment = Straight | Arc | Bend | SCurve | Spin | Stop
+@dataclass(frozen=True)
+class Slide:
+    """An omnidirectional robot's move without turning: ``forward_m`` along and ``left_m`` across the heading it
+    starts with, in a straight line, at up to ``speed_mps`` (> 0); sideways when ``forward_m`` = 0, diagonal
+    otherwise. Starts and ends at rest, like a spin; its speed ramps as a straight's. With u = (forward, left)
+    / length, the pose after progress q is (u_x q, u_y q, 0), v = u_x q̇ and v_y = u_y q̇."""
+
+    forward_m: float
+    left_m: float
+    speed_mps: float = 0.4
+
+    def __post_init__(self):
+        _finite("Slide.forward_m", self.forward_m)
+        _finite("Slide.left_m", self.left_m)
+        _positive("Slide.speed_mps", self.speed_mps)
+        if self.forward_m == 0 and self.left_m == 0:
+            raise ValueError("Slide.forward_m and Slide.left_m must not both be 0")
+
+    @property
+    def path_length_m(self) -> float:
+        return math.hypot(self.forward_m, self.left_m)
+
+    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> _SpeedProfile:
+        return _speed_profile(0.0, self.speed_mps, 0.0, self.path_length_m, limits.accel_mps2, limits.jerk_mps3)
+
+    def motion(self, q, q_dot, q_ddot):
+        along, across = self.forward_m / self.path_length_m, self.left_m / self.path_length_m
+        zero = np.zeros_like(q)
+        return along * q, across * q, zero, along * q_dot, zero, along * q_ddot, zero, across * q_dot
+
+
+Segment = Straight | Arc | Bend | SCurve | Spin | Stop | Slide
 
 
 def _handover_limit(before: Segment, after: Segment) -> float:
@@ -519,7 +556,8 @@ class PlanarState:
     """The robot's state at ``times_s`` (N,) seconds since the plan's start; every field is (N,).
 
     ``x``, ``y`` (m) and ``yaw`` (rad, unwrapped) of base_link in world; ``v`` (m/s, along base x,
-    negative in reverse), ``omega`` (rad/s, about z), ``accel`` = v̇ (m/s²), ``angular_accel`` = ω̇ (rad/s²).
+    negative in reverse), ``omega`` (rad/s, about z), ``accel`` = v̇ (m/s²), ``angular_accel`` = ω̇ (rad/s²),
+    ``lateral`` = v_y (m/s, along base y: nonzero only in a ``Slide``).
     """
 
     times_s: np.ndarray
@@ -530,6 +568,7 @@ class PlanarState:
     omega: np.ndarray
     accel: np.ndarray
     angular_accel: np.ndarray
+    lateral: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -542,7 +581,8 @@ class _Leg:
     origin: tuple[float, float, float]
 
     def state(self, tau: np.ndarray) -> tuple[np.ndarray, ...]:
-        """World x, y, θ, v, ω, a, ω̇ at ``tau`` seconds into the leg: the start pose composed with the local one."""
+        """World x, y, θ, v, ω, a, ω̇, v_y at ``tau`` seconds into the leg: the start pose composed with the local
+        one."""
         x, y, yaw, *rates = self.segment.motion(*self.speed(tau))
         x0, y0, yaw0 = self.origin
         cos0, sin0 = math.cos(yaw0), math.sin(yaw0)
@@ -596,8 +636,8 @@ class MotionPlan:
 
     @property
     def distance_m(self) -> float:
-        """Path length driven, metres; reverse counts positive, spins and stops count zero."""
-        return sum(seg.path_length_m for seg in self.segments if isinstance(seg, _PathSegment))
+        """Path length driven, metres; reverse and slides count positive, spins and stops count zero."""
+        return sum(seg.path_length_m for seg in self.segments if isinstance(seg, _PathSegment | Slide))
 
     def sample(self, times_s) -> PlanarState:
         """The state at ``times_s`` (scalar or (N,) seconds within [0, ``duration_s``])."""
@@ -615,7 +655,7 @@ class MotionPlan:
             )
         times = np.clip(times, 0.0, self.duration_s)
         leg_of = np.searchsorted(self._starts, times, side="right") - 1
-        values = np.empty((7, times.size))
+        values = np.empty((8, times.size))
         for k in np.unique(leg_of):
             chosen = leg_of == k
             values[:, chosen] = self._legs[k].state(times[chosen] - self._legs[k].start_s)
@@ -905,6 +945,115 @@ def path_downward_long() -> list[Segment]:
     ]
 
 
+# --------------------------------------------------------- the second paper's experiments (its Tables 1 and 2)
+
+PAPER_TURN_RATE_RADPS = np.radians(20.0)  # the second paper's fastest measured rotation, about 20 deg/s (exp. VIII)
+STAGE_LIMITS = MotionLimits(accel_mps2=2.0, jerk_mps3=50.0, angular_accel_radps2=4.0, angular_jerk_radps3=100.0)
+STAGE_REST_S = 0.1  # the stage stands still this long after each step: the paper's images are taken at rest
+CART_ROOM_M = (4.0, 3.5)  # the motion-capture room the cart wanders in (experiments I-II), metres, centred on the start
+STAGE_ARM_M = 0.277  # the camera's distance from the rotational stage's axis (experiments VII-VIII: 0.87 m per 180 deg)
+
+
+def random_cart(
+    distance_m: float, speed_mps: float, seed: int, room_m=CART_ROOM_M, max_rate_radps=PAPER_TURN_RATE_RADPS
+) -> list[Segment]:
+    """A cart pushed at random about a room (the second paper's experiments I-II): seeded draws of straights,
+    smooth bends, diagonal slides and turns on the spot, until ``distance_m`` is driven.
+
+    Turns lean towards the room's centre (the angle to it plus 40 degrees of Gaussian noise); every segment keeps
+    base_link inside ``room_m`` (x, y extent, centred on the start), and draws that would leave it are drawn
+    again. Nothing turns faster than ``max_rate_radps``: a bend of angle φ over S metres at speed v peaks at
+    ω = 2 |φ| v / S, so S = 2 |φ| v / ω_max. The draws depend on ``seed`` alone."""
+    rng = np.random.default_rng(seed)
+    half = np.asarray(room_m, dtype=float) / 2
+    segments, pose, driven = [], (0.0, 0.0, 0.0), 0.0
+    while driven < distance_m:
+        x, y, yaw = pose
+        to_centre = math.remainder(math.atan2(-y, -x) - yaw, 2 * math.pi) if math.hypot(x, y) > 0.3 else 0.0
+        turn = float(np.clip(to_centre + rng.normal(0.0, np.radians(40)), -np.radians(120), np.radians(120)))
+        turn = math.copysign(max(abs(turn), np.radians(20)), turn)
+        kind = rng.choice(["straight", "bend", "slide", "spin"], p=[0.35, 0.45, 0.12, 0.08])
+        if kind == "straight":
+            candidate = Straight(float(rng.uniform(0.3, 1.0)), speed_mps)
+        elif kind == "bend":
+            candidate = Bend(turn, 2 * abs(turn) * speed_mps / max_rate_radps, speed_mps)
+        elif kind == "slide":
+            across = float(rng.choice([-1, 1]) * rng.uniform(0.2, 0.4))
+            candidate = Slide(float(rng.uniform(-0.3, 0.4)), across, speed_mps)
+        else:
+            candidate = Spin(float(np.clip(turn, -np.radians(60), np.radians(60))), max_rate_radps)
+        plan = MotionPlan([candidate], pose)
+        state = plan.sample(np.linspace(0.0, plan.duration_s, 25))
+        if (np.abs(state.x) <= half[0]).all() and (np.abs(state.y) <= half[1]).all():
+            segments.append(candidate)
+            pose = (float(state.x[-1]), float(state.y[-1]), float(state.yaw[-1]))
+            driven += plan.distance_m
+    return segments
+
+
+def path_cart_i() -> list[Segment]:
+    """Experiment I: a cart pushed at random over a wood floor, about 18 m, slowly (the paper: 17.83 m at 0.16 m/s)."""
+    return random_cart(17.8, 0.24, seed=1)
+
+
+def path_cart_ii() -> list[Segment]:
+    """Experiment II: the same, faster (the paper: 19.27 m at 0.29 m/s)."""
+    return random_cart(19.2, 0.6, seed=2)
+
+
+def stage_steps(lengths_m) -> list[Segment]:
+    """A linear stage pushing the camera forward by each of ``lengths_m`` in turn, resting ``STAGE_REST_S`` after each
+    step (and before the first)."""
+    steps = [Stop(STAGE_REST_S)]
+    for length in lengths_m:
+        steps += [Straight(float(length), 0.2), Stop(STAGE_REST_S)]
+    return steps
+
+
+def path_stage_iv() -> list[Segment]:
+    """Experiment IV: 50 steps of 10 mm on the linear stage, 0.50 m."""
+    return stage_steps(np.full(50, 0.010))
+
+
+def path_stage_v() -> list[Segment]:
+    """Experiment V: 100 steps of 5-20 mm (seeded) on the linear stage, 1.24 m in all."""
+    steps = np.random.default_rng(5).uniform(0.005, 0.020, 100)
+    return stage_steps(steps * 1.24 / steps.sum())
+
+
+def path_stage_vi() -> list[Segment]:
+    """Experiment VI: one continuous run along the linear stage, 3.18 m at 0.12 m/s."""
+    return [Straight(3.18, 0.125)]
+
+
+def path_rotation_vii() -> list[Segment]:
+    """Experiment VII: the rotational stage turns the camera clockwise by 90 degrees in steps of one degree, its arm
+    ``STAGE_ARM_M`` long (0.44 m of travel), resting after each step."""
+    step = Arc(STAGE_ARM_M, -np.radians(1.0), 0.1)
+    return [Stop(STAGE_REST_S), *itertools.chain.from_iterable((step, Stop(STAGE_REST_S)) for _ in range(90))]
+
+
+def path_rotation_viii() -> list[Segment]:
+    """Experiment VIII: the rotational stage turns the camera by 180 degrees in one go at 20 deg/s (0.87 m)."""
+    return [Arc(STAGE_ARM_M, np.pi, STAGE_ARM_M * PAPER_TURN_RATE_RADPS)]
+
+
+def path_agv_ix() -> list[Segment]:
+    """Experiment IX: the omnidirectional AGV, four laps of 20.2 m (81 m) at up to 0.75 m/s (about 0.6 m/s on
+    average while moving) inside a 5 x 3 m area: ahead, a quarter turn, ahead, sideways, a quarter turn back,
+    diagonally and in reverse, turning at 20 deg/s."""
+    lap = [
+        Straight(5.0, 0.75),
+        Spin(np.pi / 2, PAPER_TURN_RATE_RADPS),
+        Straight(3.0, 0.75),
+        Slide(0.0, 5.0, 0.75),
+        Spin(-np.pi / 2, PAPER_TURN_RATE_RADPS),
+        Slide(3.0, -3.0, 0.75),
+        Straight(-3.0, 0.75),
+    ]
+    return lap * 4
+
+
 PATHS: dict[str, Callable[[], list[Segment]]] = {
     "sample": path_sample,
     "test": path_test,
@@ -917,11 +1066,22 @@ PATHS: dict[str, Callable[[], list[Segment]]] = {
     "downward": path_downward,
     "downward-short": path_downward_short,
     "downward-long": path_downward_long,
+    "cart-i": path_cart_i,
+    "cart-ii": path_cart_ii,
+    "stage-iv": path_stage_iv,
+    "stage-v": path_stage_v,
+    "stage-vi": path_stage_vi,
+    "rotation-vii": path_rotation_vii,
+    "rotation-viii": path_rotation_viii,
+    "agv-ix": path_agv_ix,
 }
+# the stages move faster than a robot: a 10 mm step takes 0.2 s
+PATH_LIMITS = dict.fromkeys(("stage-iv", "stage-v", "stage-vi", "rotation-vii", "rotation-viii"), STAGE_LIMITS)
 
 
-def named_plan(name: str, start: Sequence[float] = (0.0, 0.0, 0.0), limits: MotionLimits = DEFAULT_LIMITS):
-    """The ``MotionPlan`` of one of ``PATHS`` from ``start`` = (x, y, yaw)."""
+def named_plan(name: str, start: Sequence[float] = (0.0, 0.0, 0.0), limits: MotionLimits | None = None):
+    """The ``MotionPlan`` of one of ``PATHS`` from ``start`` = (x, y, yaw), with ``limits`` (None: the path's own,
+    ``PATH_LIMITS``, else ``DEFAULT_LIMITS``)."""
     if name not in PATHS:
         raise ValueError(f"unknown path {name!r}; the named paths are {', '.join(PATHS)}")
-    return MotionPlan(PATHS[name](), start, limits)
+    return MotionPlan(PATHS[name](), start, limits or PATH_LIMITS.get(name, DEFAULT_LIMITS))

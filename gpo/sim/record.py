@@ -92,6 +92,22 @@ PRESETS = {
         for k, kind in enumerate(("wood", "raised", "industrial"))
     },
     "downward-long": Preset("downward", "downward-long", "wood", 33, "the downward camera over a wood floor, 16.5 m"),
+    # the second paper's experiments (its Tables 1 and 2): the downward camera on a cart (I-II), on the linear and
+    # rotational stages (IV-VIII) and on the omnidirectional AGV (IX); the paper's III (raised-floor corridor,
+    # ground markers) is not among them
+    **{
+        f"paper2-{number}": Preset("downward", path, floor, seed, f"experiment {number.upper()}: {text}")
+        for number, path, floor, seed, text in (
+            ("i", "cart-i", "wood", 41, "a cart pushed at random over a wood floor, 18 m"),
+            ("ii", "cart-ii", "wood", 42, "the same, faster, 19.7 m"),
+            ("iv", "stage-iv", "industrial", 44, "50 steps of 10 mm on a linear stage, 0.5 m"),
+            ("v", "stage-v", "industrial", 45, "100 steps of 5-20 mm on a linear stage, 1.24 m"),
+            ("vi", "stage-vi", "industrial", 46, "along a linear stage at 0.12 m/s, 3.18 m"),
+            ("vii", "rotation-vii", "industrial", 47, "a 90 degree rotation in 1 degree steps on a 0.28 m arm"),
+            ("viii", "rotation-viii", "industrial", 48, "a 180 degree rotation at 20 deg/s on a 0.28 m arm"),
+            ("ix", "agv-ix", "industrial", 49, "the omnidirectional AGV, 81 m with sideways and diagonal moves"),
+        )
+    },
 }
 
 
