@@ -35,6 +35,7 @@ from gpo.bag import BagWriter
 from gpo.rig import Rig
 from gpo.sim.floors import make_floor
 from gpo.sim.motion import T265_DRIFT, MotionPlan, named_plan, tracking_odometry
+from gpo.sim.outages import Outage, apply_outage, outage_at
 from gpo.sim.render import Disturbances, FloorRenderer
 from gpo.sim.rigs import RIGS
 from gpo.targets import Chessboard, FloorBoard
@@ -53,6 +54,7 @@ class Preset:
 
     ``exposure_s`` > 0 blurs each frame over that exposure (``blur_samples`` poses averaged).
     ``disturbances`` put moving sheets and glints in the camera's view (none by default).
+    ``outages`` (``gpo.sim.outages.Outage``) are stretches where the floor cannot be measured (none by default).
     """
 
     rig: str
@@ -63,6 +65,7 @@ class Preset:
     exposure_s: float = 0.0
     blur_samples: int = 3
     disturbances: Disturbances = field(default_factory=Disturbances)
+    outages: tuple[Outage, ...] = ()
 
 
 PRESETS = {
@@ -93,6 +96,24 @@ PRESETS = {
     },
     "downward-long": Preset("downward", "downward-long", "wood", 33, "the downward camera over a wood floor, 16.5 m"),
 }
+# Floor outages: the long paths again (same motion, floor, seed and tracking camera), with four stretches where the
+# floor cannot be measured, 6 s in all (12-14 % of the frames)
+FLOOR_OUTAGES = (
+    Outage("textureless", 6.0, 3.0),
+    Outage("glare", 16.0, 1.5),
+    Outage("fast", 27.0, 0.5),
+    Outage("lifted", 37.0, 1.0),
+)
+PRESETS.update(
+    {
+        f"long{k}-outages": dataclasses.replace(
+            PRESETS[f"long{k}"],
+            description=f"long{k}, the floor unmeasurable 4 times, 6 s in all (no texture, glare, too fast, lifted)",
+            outages=FLOOR_OUTAGES,
+        )
+        for k in (1, 2, 3)
+    }
+)
 
 
 def preset(name: str) -> Preset:
@@ -138,6 +159,8 @@ def simulate(name: str, out, format: str = "ros1", progress: bool = True) -> Pat
             stamp_ns = START_NS + round(time_s * 1e9)
             times, poses = _exposure(plan, time_s, chosen)
             image = renderer.render(poses, frame_seed=(chosen.seed, index), times_s=times)
+            outage = outage_at(chosen.outages, time_s)
+            image = image if outage is None else apply_outage(outage.kind, image)
             bag.add_image(rig.image_topic, stamp_ns, image, rig.frame_id)
             bag.add_camera_info(rig.info_topic, stamp_ns, rig.camera, rig.frame_id)
     return Path(out)
@@ -176,7 +199,7 @@ def fingerprint_sources() -> list[Path]:
     """
     package = Path(__file__).resolve().parents[1]
     return [
-        *(package / "sim" / f"{name}.py" for name in ("floors", "motion", "record", "render", "rigs")),
+        *(package / "sim" / f"{name}.py" for name in ("floors", "motion", "outages", "record", "render", "rigs")),
         *(package / f"{name}.py" for name in ("bag", "camera", "rig", "targets", "trajectory")),
     ]
 
