@@ -537,16 +537,16 @@ def bicycle_panel(wheelbase_m: float = 0.8, rear_to_reference_m: float = 0.8, ra
 FUSION_SLIDERS = {  # FusionSettings field -> (slider label, log10 of its lowest and highest value)
     "floor_speed_sigma_mps": ("floor sigma v [m/s]", -4.0, 0.0),
     "floor_turn_sigma_radps": ("floor sigma omega [rad/s]", -4.0, 0.0),
-    "tracking_speed_sigma_mps": ("camera sigma v [m/s]", -3.0, 1.0),
-    "tracking_turn_sigma_radps": ("camera sigma omega [rad/s]", -3.0, 1.0),
+    "tracking_position_walk_m_per_sqrt_s": ("camera position walk [m/sqrt(s)]", -4.0, 0.0),
+    "tracking_yaw_walk_rad_per_sqrt_s": ("camera yaw walk [rad/sqrt(s)]", -5.0, -1.0),
     "accel_mps2": ("accel [m/s^2/sqrt(Hz)]", -2.0, 2.0),
     "angular_accel_radps2": ("angular accel [rad/s^2/sqrt(Hz)]", -2.0, 2.0),
 }
 
 
 def fusion_panel(floor, tracking, truth, settings: FusionSettings | None = None) -> widgets.VBox:
-    """The EKF's noise parameters on log-scale sliders (``FUSION_SLIDERS``): the sigmas of the floor's and the tracking
-    camera's (v, omega) measurements and the process noise; on each release ``gpo.fusion.fuse`` runs again.
+    """The EKF's noise parameters on log-scale sliders (``FUSION_SLIDERS``): the sigmas of the floor's (v, omega), the
+    tracking camera's random walks and the process noise; on each release ``gpo.fusion.fuse`` runs again.
 
     ``floor``: the floor odometry with its flow's inlier counts (a ``gpo.sim.table4.FloorRun``, or anything with its
     ``trajectory`` and ``inliers``); ``tracking``: the tracking camera's path of base_link; ``truth``: the true path;
