@@ -260,7 +260,10 @@ def test_inliers_must_match_the_floor_poses():
 # biases as states: a floor odometry and the simulator's drifting tracking camera on a named path
 
 
-def _simulated(path, seed, drift=None, floor_sigma=(0.002, 0.005), outage_s=None):
+FLOOR_SIGMA = (FusionSettings().floor_speed_sigma_mps, FusionSettings().floor_turn_sigma_radps)
+
+
+def _simulated(path, seed, drift=None, floor_sigma=FLOOR_SIGMA, outage_s=None):
     """(floor odometry at 30 Hz: the truth's steps with white noise of ``increment_covariance(*floor_sigma)``, its
     inliers (0 inside ``outage_s`` = (start, end) seconds), the tracking camera of ``gpo.sim.motion`` with ``drift``
     (default: the T265's) seeded by ``seed`` turned into base_link, the truth at the floor's stamps as planar poses
