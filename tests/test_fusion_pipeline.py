@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 from gpo.bag import BagWriter, Recording
 from gpo.fusion import FusionSettings, TrackingMount
-from gpo.pipeline import load_config, run, tracking_mount, tracking_path
+from gpo.pipeline import load_config, run, save_config, tracking_mount, tracking_path
 from gpo.trajectory import Trajectory
 
 MOUNT = TrackingMount((0.6, 0.0, 0.12), (0.0, -6.0, 0.0))  # ahead of the rear axle, pitched 6 deg down
@@ -96,3 +96,13 @@ def test_unreadable_tracking_poses_leave_the_floor_odometry_written(tmp_path):
     assert len(result.trajectory) == 5  # the floor odometry
     tum, _ = result.write(tmp_path / "out.tum")
     assert len([line for line in tum.read_text().splitlines() if not line.startswith("#")]) == 5
+
+
+def test_the_tracking_mount_goes_through_the_config_file_and_bad_ones_are_refused(tmp_path):
+    config = _fused_config(MOUNT)
+    again = load_config(save_config(tmp_path / "with_mount.yaml", config))
+    assert again.fusion.tracking_mount == MOUNT and again.fusion == config.fusion
+    with pytest.raises(ValueError, match=r"fusion\.tracking_mount needs position_m and rpy_deg"):
+        FusionSettings(tracking_mount={"position_m": [0.6, 0.0, 0.12]})
+    with pytest.raises(ValueError, match=r"fusion.tracking_mount.rpy_deg must be 3 finite numbers"):
+        FusionSettings(tracking_mount={"position_m": [0.6, 0.0, 0.12], "rpy_deg": [0.0, float("nan"), 0.0]})
