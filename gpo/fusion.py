@@ -1,24 +1,37 @@
-"""An extended Kalman filter that fuses odometry sources into one path of ``base_link``.
+"""An extended Kalman filter that fuses odometry sources into one path of ``base_link``, and calibrates one of them.
 
 State (``STATE``): x, y (m) and heading theta (rad) of base_link in the odometry frame, its forward speed v (m/s)
-and yaw rate omega (rad/s). Process model: v and omega stay constant over a step, driven by white acceleration
-noise (``ProcessNoise``); the pose moves along the exact arc they describe (``gpo.kinematics.arc_increment``),
-and the covariance through the Jacobian of that motion.
+and yaw rate omega (rad/s), and two **biases** of the calibrated source (the tracking camera): its ``scale`` error
+(its distances are 1 + scale times the true ones) and its ``yaw_bias`` (rad/s added to every turn rate). Process
+model: v and omega stay constant over a step, driven by white acceleration noise (``ProcessNoise``); the pose moves
+along the exact arc they describe (``gpo.kinematics.arc_increment``), the covariance through the Jacobian of that
+motion; the biases are random walks (``BiasModel``).
 
 Every source is used **differentially**, like robot_localization's differential mode: only a source's pose
 increments count (already turned into base_link: ``gpo.trajectory.base_from_sensor_odometry``), never its absolute
 pose, which drifts. An increment over [t0, t1] is a measurement of the filter's own motion between those times: the
 filter keeps a copy of its pose at t0 for each source (stochastic cloning, Roumeliotis and Burdick 2002), and the
 measurement is the forward part and the turn of ``between(clone, pose)`` (``MEASURED``), with the covariance the
-increment carries (``increment_covariance``). base_link does not slide sideways, so a source's sideways steps are
-its own error and are not fused.
+increment carries. For the calibrated source the expected measurement is that motion as the biased source sees it,
+((1 + scale) dx, dtheta + yaw_bias dt): where both sources measure, their disagreement is what the biases are
+estimated from; where only the calibrated one does (a floor outage), its increments are corrected by them.
+base_link does not slide sideways, so a source's sideways steps are its own error and are not fused.
 Measurements must come in time order; ``OdometryFusion.add`` refuses stale ones (earlier than the filter's time)
 and the caller decides what to skip.
+
+The calibrated source's increments are correlated: each is the difference of two poses that each carry white
+jitter, so consecutive increments share one pose's jitter with opposite signs, and n increments add up to the
+jitter of two poses, not of 2n. The filter keeps that correlation exactly: the jitter of the source's last pose
+(along its heading and in yaw) is a state (``JITTER``), cloned with the pose; an increment measures
+motion + new jitter - last jitter + the random walks' noise (``tracking_increment_covariance``). ``fuse`` also
+rate-matches the 200 Hz tracking camera to the floor: its poses are taken at the floor's frames (the last pose at or
+before each), so each of its increments spans a floor interval and the filter makes 30 updates a second, not 230.
 """
 
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,7 +41,12 @@ from scipy.linalg.lapack import dpotrf
 from gpo.kinematics import arc_increment, between
 from gpo.trajectory import Trajectory
 
-STATE = ("x", "y", "theta", "v", "omega")
+STATE = ("x", "y", "theta", "v", "omega", "scale", "yaw_bias")
+MOTION = 5  # the state's motion part: x, y, theta, v, omega
+BIASES = slice(5, 7)
+JITTER = slice(7, 9)  # the calibrated source's jitter (along its heading m, yaw rad) at its last pose
+NEW_JITTER = slice(9, 11)  # its jitter at the pose ending the step being fused
+AUGMENTED = 11  # the clones follow
 MEASURED = [0, 2]  # of a base_link increment (dx, dy, dtheta): base_link does not slide sideways, dy is not fused
 MAX_NIS = 50.0  # an innovation this many sigmas squared away is refused as an outlier
 
@@ -46,9 +64,21 @@ class ProcessNoise:
     angular_accel_radps2: float = 0.3
 
 
+@dataclass(frozen=True)
+class BiasModel:
+    """The calibrated source's biases before any measurement, zero mean with standard deviations ``scale_sigma``
+    (a fraction: 0.05 = distances 5 % off) and ``yaw_bias_sigma_radps`` (rad/s), and how fast they may wander:
+    random walks of ``scale_walk_per_sqrt_s`` (1/sqrt(s)) and ``yaw_bias_walk_radps_per_sqrt_s`` (rad/s/sqrt(s))."""
+
+    scale_sigma: float = 0.05
+    yaw_bias_sigma_radps: float = 0.005
+    scale_walk_per_sqrt_s: float = 1e-4
+    yaw_bias_walk_radps_per_sqrt_s: float = 1e-5
+
+
 def motion_jacobian(state: np.ndarray, dt: float) -> np.ndarray:
     """F (5, 5): the derivative of the first-order motion x += v cos(theta) dt, y += v sin(theta) dt,
-    theta += omega dt with respect to the state."""
+    theta += omega dt with respect to the state's motion part (x, y, theta, v, omega)."""
     v, cos, sin = state[3], math.cos(state[2]), math.sin(state[2])
     jacobian = np.eye(5)
     jacobian[0, 2], jacobian[0, 3] = -v * sin * dt, cos * dt
@@ -79,6 +109,13 @@ def increment_covariance(speed_sigma_mps: float, turn_sigma_radps: float, dt: fl
     return np.diag(np.square([speed_sigma_mps * dt, turn_sigma_radps * dt]))
 
 
+def tracking_increment_covariance(position_walk_m_per_sqrt_s: float, yaw_walk_rad_per_sqrt_s: float, dt: float):
+    """R (2, 2) of (dx, dtheta) of a tracking camera's increment over ``dt`` seconds whose position and heading are
+    random walks (m/sqrt(s), rad/sqrt(s)): their variance grows with dt. (The jitter on each pose is a state of the
+    filter, ``JITTER``, because it correlates consecutive increments.)"""
+    return np.diag([position_walk_m_per_sqrt_s**2 * dt, yaw_walk_rad_per_sqrt_s**2 * dt])
+
+
 def increment_jacobians(clone: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The derivatives (3, 3) of ``gpo.kinematics.between(clone, pose)`` with respect to ``clone`` and to ``pose``
     (each x, y, theta)."""
@@ -95,34 +132,47 @@ class OdometryFusion:
 
     Each source in ``sources`` keeps a copy of the pose at the end of its last step, correlated with the state as
     the pose was; of its next increment (dx, dy, dtheta over [time_s - dt_s, time_s], in base_link at the step's
-    start), dx and dtheta are measured as those of ``between(clone, pose)``. Whatever the state's v and omega did
-    inside the step, the pose is corrected by the whole increment, so the path does not lag behind a source by part
-    of its interval.
+    start), dx and dtheta are measured as those of ``between(clone, pose)``, for the source named ``calibrated``
+    as ((1 + scale) dx, dtheta + yaw_bias dt_s). Whatever the state's v and omega did inside the step, the pose is
+    corrected by the whole increment, so the path does not lag behind a source by part of its interval.
     """
 
     def __init__(
-        self, start_s: float, noise: ProcessNoise = ProcessNoise(), pose=(0.0, 0.0, 0.0), sources=("floor", "tracking")
+        self,
+        start_s: float,
+        noise: ProcessNoise = ProcessNoise(),
+        pose=(0.0, 0.0, 0.0),
+        sources=("floor", "tracking"),
+        calibrated: str | None = "tracking",
+        biases: BiasModel = BiasModel(),
+        jitter=(0.0, 0.0),
     ):
-        self.noise = noise
+        self.noise, self.biases = noise, biases
         self.time_s = float(start_s)
-        size = 5 + 3 * len(sources)
+        self.calibrated = calibrated
+        self._jitter_variance = np.square(np.asarray(jitter, dtype=float))
+        size = AUGMENTED + 3 * len(sources)
         self._filter = ExtendedKalmanFilter(dim_x=size, dim_z=len(MEASURED))
-        self._filter.x = np.array([*pose, 0.0, 0.0, *np.tile(np.asarray(pose, dtype=float), len(sources))])
+        self._filter.x = np.zeros(size)
+        self._filter.x[:3] = pose
+        self._filter.x[AUGMENTED:] = np.tile(np.asarray(pose, dtype=float), len(sources))
         self._filter.P = np.zeros((size, size))
         self._filter.P[3:5, 3:5] = np.eye(2)  # the pose is the given one, the motion unknown
-        self._clones = {name: (5 + 3 * k, self.time_s) for k, name in enumerate(sources)}
+        self._filter.P[5, 5], self._filter.P[6, 6] = biases.scale_sigma**2, biases.yaw_bias_sigma_radps**2
+        self._fresh_jitter(JITTER)
+        self._clones = {name: (AUGMENTED + 3 * k, self.time_s) for k, name in enumerate(sources)}
         self._jitter = 1e-12 * np.eye(size)  # added to the covariance before _check's Cholesky factorisation
         self.refused = 0
 
     @property
     def state(self) -> np.ndarray:
-        """The state (5,) at ``time_s``."""
-        return self._filter.x[:5].copy()
+        """The state (7,) at ``time_s``: x, y, theta, v, omega, scale, yaw_bias."""
+        return self._filter.x[: len(STATE)].copy()
 
     @property
     def covariance(self) -> np.ndarray:
-        """The state's covariance (5, 5)."""
-        return self._filter.P[:5, :5].copy()
+        """The state's covariance (7, 7)."""
+        return self._filter.P[: len(STATE), : len(STATE)].copy()
 
     def predict(self, time_s: float) -> None:
         """Move the state to ``time_s`` (not before the filter's time) with the constant-velocity model; the
@@ -136,15 +186,18 @@ class OdometryFusion:
             raise ValueError(f"cannot predict back in time: {time_s:.6f} s is before the filter's {self.time_s:.6f} s")
         if dt == 0:
             return
-        ekf, state = self._filter, self._filter.x[:5]
+        ekf, state = self._filter, self._filter.x[:MOTION]
         motion = motion_jacobian(state, dt)
-        # P = F P F' with F the identity outside the state's block (the clones stay): only its first rows and columns
-        ekf.P[:5] = motion @ ekf.P[:5]
-        ekf.P[:, :5] = ekf.P[:, :5] @ motion.T
-        ekf.P[:5, :5] += process_covariance(state, dt, self.noise)
+        # P = F P F' with F the identity outside the motion block (biases and clones stay): only its rows and columns
+        ekf.P[:MOTION] = motion @ ekf.P[:MOTION]
+        ekf.P[:, :MOTION] = ekf.P[:, :MOTION] @ motion.T
+        ekf.P[:MOTION, :MOTION] += process_covariance(state, dt, self.noise)
+        ekf.P[5, 5] += self.biases.scale_walk_per_sqrt_s**2 * dt
+        ekf.P[6, 6] += self.biases.yaw_bias_walk_radps_per_sqrt_s**2 * dt
         step = arc_increment(state[3], state[4], dt)
         cos, sin = math.cos(state[2]), math.sin(state[2])
-        ekf.x[:5] = state + np.array([cos * step[0] - sin * step[1], sin * step[0] + cos * step[1], step[2], 0.0, 0.0])
+        moved = np.array([cos * step[0] - sin * step[1], sin * step[0] + cos * step[1], step[2], 0.0, 0.0])
+        ekf.x[:MOTION] = state + moved
         self.time_s = time_s
 
     def add(self, source: str, time_s: float, increment, dt_s: float, covariance) -> bool:
@@ -162,24 +215,43 @@ class OdometryFusion:
             raise ValueError(f"a measurement needs a finite increment, got {increment}")
         self._predict(time_s)
         index, since = self._clones[source]
+        calibrated = source == self.calibrated
+        if calibrated:
+            self._fresh_jitter(NEW_JITTER)
         fused = (
-            increment is not None and abs(time_s - dt_s - since) < 1e-6 and self._update(index, increment, covariance)
+            increment is not None
+            and abs(time_s - dt_s - since) < 1e-6
+            and self._update(index, increment, covariance, dt_s if calibrated else None)
         )
+        if calibrated and fused:  # the new pose's jitter is the next step's old one
+            self._copy(NEW_JITTER, JITTER)
+        elif calibrated:  # not fused: the jitter of the pose the clone moves to is a fresh draw
+            self._fresh_jitter(JITTER)
         self._clone(source)
         self._check()
         return fused
 
-    def _update(self, index: int, increment, covariance) -> bool:
+    def _update(self, index: int, increment, covariance, biased_dt: float | None) -> bool:
+        """Fuse one increment against the clone at ``index``; ``biased_dt``: the step's seconds when the source is
+        the calibrated one (its measurement then carries the biases), else None."""
         ekf, clone = self._filter, slice(index, index + 3)
         measured = np.asarray(increment, dtype=float)[MEASURED]
         covariance = np.asarray(covariance, dtype=float)
         # the expected measurement and its Jacobian at the state, once for the NIS gate and filterpy's update:
         # between(clone, pose) is the difference turned into the clone's frame, by_pose that rotation
         by_clone, by_pose = increment_jacobians(ekf.x[clone], ekf.x[:3])
-        expected = (by_pose @ (ekf.x[:3] - ekf.x[clone]))[MEASURED]
-        expected[1] = _wrap(expected[1])
+        moved = (by_pose @ (ekf.x[:3] - ekf.x[clone]))[MEASURED]
+        moved[1] = _wrap(moved[1])
         linear = np.zeros((len(MEASURED), len(ekf.x)))
         linear[:, :3], linear[:, clone] = by_pose[MEASURED], by_clone[MEASURED]
+        expected = moved
+        if biased_dt is not None:  # ((1 + scale) dx, dtheta + yaw_bias dt) + new jitter - old jitter
+            scale, yaw_bias = ekf.x[BIASES]
+            jitter = ekf.x[NEW_JITTER] - ekf.x[JITTER]
+            expected = np.array([(1.0 + scale) * moved[0] + jitter[0], moved[1] + yaw_bias * biased_dt + jitter[1]])
+            linear[0] *= 1.0 + scale
+            linear[0, 5], linear[1, 6] = moved[0], biased_dt
+            linear[:, JITTER], linear[:, NEW_JITTER] = -np.eye(2), np.eye(2)
         innovation = _residual(measured, expected)
         spread = linear @ ekf.P @ linear.T + covariance
         if _nis(innovation, spread) > MAX_NIS:
@@ -188,13 +260,25 @@ class OdometryFusion:
         ekf.update(measured, lambda _: linear, lambda _: expected, R=covariance, residual=_residual)
         return True
 
+    def _fresh_jitter(self, block: slice) -> None:
+        """A new pose's jitter in ``block``: zero mean, its variance, uncorrelated with everything else."""
+        ekf = self._filter
+        ekf.x[block] = 0.0
+        ekf.P[block, :] = 0.0
+        ekf.P[:, block] = 0.0
+        ekf.P[block, block] = np.diag(self._jitter_variance)
+
+    def _copy(self, source: slice, target: slice) -> None:
+        """Copy the states ``source`` with their covariance and correlations into ``target``."""
+        ekf = self._filter
+        ekf.x[target] = ekf.x[source]
+        ekf.P[target, :] = ekf.P[source, :]
+        ekf.P[:, target] = ekf.P[:, source]
+
     def _clone(self, source: str) -> None:
         """Copy the pose, its covariance and its correlations into ``source``'s clone, stamped now."""
         index, _ = self._clones[source]
-        ekf, clone = self._filter, slice(index, index + 3)
-        ekf.x[clone] = ekf.x[:3]
-        ekf.P[clone, :] = ekf.P[:3, :]
-        ekf.P[:, clone] = ekf.P[:, :3]
+        self._copy(slice(0, 3), slice(index, index + 3))
         self._clones[source] = (index, self.time_s)
 
     def _check(self) -> None:
@@ -227,95 +311,200 @@ def _residual(measured: np.ndarray, expected: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class TrackingMount:
+    """The pose of the tracking camera's pose frame (REP-103: x forward, y left, z up) in base_link:
+    ``position_m`` (x, y, z metres) and ``rpy_deg`` (roll, pitch, yaw degrees, extrinsic x-y-z)."""
+
+    position_m: tuple[float, float, float]
+    rpy_deg: tuple[float, float, float]
+
+    def __post_init__(self):
+        for name in ("position_m", "rpy_deg"):
+            values = getattr(self, name)
+            if np.shape(values) != (3,) or not np.isfinite(np.asarray(values, dtype=float)).all():
+                raise ValueError(f"fusion.tracking_mount.{name} must be 3 finite numbers, got {values!r}")
+            object.__setattr__(self, name, tuple(float(v) for v in values))
+
+
+@dataclass(frozen=True)
 class FusionSettings:
     """What ``--method fused`` fuses: the floor odometry of ``floor_method`` with a tracking camera's own odometry on
-    ``tracking_topic`` (nav_msgs/Odometry of ``tracking_frame``, whose pose in base_link the bag's /tf_static holds).
-    Each source's increment over dt has the covariance of a mean velocity that scatters by these standard
-    deviations (m/s along and across, rad/s; ``increment_covariance``); a floor frame
-    whose flow kept fewer than ``floor_reference_inliers`` inlier tracks has its variance scaled up by
-    reference / inliers (the median of n tracks scatters as 1 / sqrt(n)). The process noise is
-    ``ProcessNoise(accel_mps2, angular_accel_radps2)``."""
+    ``tracking_topic`` (nav_msgs/Odometry of ``tracking_frame``), mounted where the bag's /tf_static says or, without
+    it, where ``tracking_mount`` says (``TrackingMount``, or its dict).
+
+    The floor: each step's mean velocity scatters by ``floor_speed_sigma_mps`` and ``floor_turn_sigma_radps`` when
+    its flow kept ``floor_reference_inliers`` inlier vectors that spread by ``floor_reference_spread_px``: a median of
+    n vectors spread by s scatters as q = s / sqrt(n), and the variance is the reference's times (1 + (q / q_ref)^2) / 2
+    (``floor_variance_scale``; on the sample's analytic floor image the steps' scatter against the truth grows with q
+    so, 0.36 mm/s and 0.3 mrad/s at the best third of q, 1.1 mm/s and 1.4 mrad/s at the worst). A step without a
+    spread (the features method) counts as the reference.
+    The tracking camera, as its maker would specify it: random walks of position and heading
+    (``tracking_position_walk_m_per_sqrt_s``, ``tracking_yaw_walk_rad_per_sqrt_s``), white jitter on each pose
+    (``tracking_jitter_m``, ``tracking_jitter_rad``), and a scale error and yaw-rate bias that the filter estimates
+    (``BiasModel``: their prior sigmas and random walks, the ``tracking_scale_*`` and ``tracking_yaw_bias_*``
+    fields). A tracking increment over more than ``tracking_max_gap_s`` is not fused.
+    The process noise is ``ProcessNoise(accel_mps2, angular_accel_radps2)``."""
 
     floor_method: str = "gpo-exact"
     tracking_topic: str = "/camera/odom/sample"
     tracking_frame: str = "camera_pose_frame"
-    floor_speed_sigma_mps: float = 0.002
-    floor_turn_sigma_radps: float = 0.03
-    tracking_speed_sigma_mps: float = 0.15
-    tracking_turn_sigma_radps: float = 0.15
+    tracking_mount: TrackingMount | None = None
+    floor_speed_sigma_mps: float = 0.0006
+    floor_turn_sigma_radps: float = 0.0006
     floor_reference_inliers: int = 60
+    floor_reference_spread_px: float = 0.3
+    tracking_position_walk_m_per_sqrt_s: float = 5e-3
+    tracking_yaw_walk_rad_per_sqrt_s: float = 1e-3
+    tracking_jitter_m: float = 5e-4
+    tracking_jitter_rad: float = 5e-4
+    tracking_scale_sigma: float = BiasModel.scale_sigma
+    tracking_yaw_bias_sigma_radps: float = BiasModel.yaw_bias_sigma_radps
+    tracking_scale_walk_per_sqrt_s: float = BiasModel.scale_walk_per_sqrt_s
+    tracking_yaw_bias_walk_radps_per_sqrt_s: float = BiasModel.yaw_bias_walk_radps_per_sqrt_s
+    tracking_max_gap_s: float = 0.25
     accel_mps2: float = ProcessNoise.accel_mps2
     angular_accel_radps2: float = ProcessNoise.angular_accel_radps2
+
+    def __post_init__(self):
+        if isinstance(self.tracking_mount, dict):
+            unknown = sorted(set(self.tracking_mount) - {"position_m", "rpy_deg"})
+            missing = sorted({"position_m", "rpy_deg"} - set(self.tracking_mount))
+            if unknown or missing:
+                raise ValueError(
+                    f"fusion.tracking_mount needs position_m and rpy_deg, got {', '.join(sorted(self.tracking_mount))}"
+                )
+            object.__setattr__(self, "tracking_mount", TrackingMount(**self.tracking_mount))
+        for name, value in vars(self).items():
+            if isinstance(value, float) and not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"fusion.{name} must be a finite number >= 0, got {value!r}")
+
+    @property
+    def bias_model(self) -> BiasModel:
+        return BiasModel(
+            self.tracking_scale_sigma,
+            self.tracking_yaw_bias_sigma_radps,
+            self.tracking_scale_walk_per_sqrt_s,
+            self.tracking_yaw_bias_walk_radps_per_sqrt_s,
+        )
+
+    def to_dict(self) -> dict:
+        """The settings as a config file's ``fusion`` section."""
+        document = dict(vars(self))
+        mount = self.tracking_mount
+        document["tracking_mount"] = None if mount is None else {"position_m": [*mount.position_m],
+                                                                 "rpy_deg": [*mount.rpy_deg]}
+        return document
 
 
 @dataclass(frozen=True)
 class FusedPath:
-    """The EKF's ``trajectory`` of base_link (odom), the state's ``covariances`` (N, 5, 5) at its poses, and how many
-    measurements were ``refused`` as outliers."""
+    """The EKF's ``trajectory`` of base_link (odom), the state's ``covariances`` (N, 7, 7) and the camera's estimated
+    ``biases`` (N, 2: scale, yaw bias rad/s) at its poses, how many measurements the NIS gate ``refused`` as
+    outliers, and the tracking camera's messages or steps ``dropped`` before the filter, counted by reason."""
 
     trajectory: Trajectory
     covariances: np.ndarray
+    biases: np.ndarray
     refused: int
+    dropped: dict[str, int]
 
 
-def fuse(floor: Trajectory, inliers: np.ndarray, tracking: Trajectory, settings: FusionSettings) -> FusedPath:
-    """The EKF's path of base_link at the floor odometry's stamps, with its covariance.
+def fuse(
+    floor: Trajectory, inliers: np.ndarray, tracking: Trajectory, settings: FusionSettings, spread_px=None
+) -> FusedPath:
+    """The EKF's path of base_link at the floor odometry's stamps, with its covariance and the camera's biases.
 
-    ``floor``: the floor odometry's base_link poses; ``inliers`` (N,): the flow's inlier tracks behind the step into
-    each pose, 0 where the step was not measured (coasted and held steps are not fused). ``tracking``: the tracking
-    camera's odometry already turned into base_link poses (``gpo.trajectory.base_from_sensor_odometry``); only its
-    increments are used. Each source's poses are taken in the order of their stamps, a repeated stamp once; the
-    sources' steps are fused in the order of their end times.
+    ``floor``: the floor odometry's base_link poses; ``inliers`` (N,): the flow's inlier vectors behind the step into
+    each pose, 0 where the step was not measured (coasted and held steps are not fused); ``spread_px`` (N,), when
+    known: their spread (``FusionSettings``; NaN counts as the reference). ``tracking``: the tracking camera's
+    odometry already turned into base_link poses (``gpo.trajectory.base_from_sensor_odometry``); only its increments
+    are used, rate-matched to the floor: its poses at the floor's frames (the last one at or before each). Poses
+    that are not finite are dropped, each source's poses are taken in the order of their stamps (a repeated stamp
+    once), a tracking step longer than ``tracking_max_gap_s`` is not fused; all counted in ``dropped``.
     """
     inliers = np.asarray(inliers, dtype=float)
     if inliers.shape != (len(floor),):
         raise ValueError(f"inliers must have one count per floor pose ({len(floor)}), got shape {inliers.shape}")
+    spread = np.full(len(floor), np.nan) if spread_px is None else np.asarray(spread_px, dtype=float)
+    if spread.shape != (len(floor),):
+        raise ValueError(f"spread_px must have one value per floor pose ({len(floor)}), got shape {spread.shape}")
+    dropped = Counter()
+    floor_times, floor_poses, kept = _ordered(floor, dropped, "floor")
+    floor_scale = floor_variance_scale(inliers[kept], spread[kept], settings)
     floor_sigmas = settings.floor_speed_sigma_mps, settings.floor_turn_sigma_radps
-    tracking_sigmas = settings.tracking_speed_sigma_mps, settings.tracking_turn_sigma_radps
-    floor_scale = settings.floor_reference_inliers / np.maximum(inliers, 1.0)
     events = [
-        *_steps("floor", floor, floor_sigmas, np.maximum(1.0, floor_scale), inliers > 0),
-        *_steps("tracking", tracking, tracking_sigmas, np.ones(len(tracking)), np.ones(len(tracking), dtype=bool)),
+        ("floor", t1, increment if inliers[kept][k + 1] > 0 else None, t1 - t0,
+         increment_covariance(*floor_sigmas, t1 - t0) * floor_scale[k + 1])
+        for k, (t0, t1, increment) in enumerate(_increments(floor_times, floor_poses))
     ]
+    tracking_times, tracking_poses, _ = _ordered(tracking, dropped, "tracking")
+    matched = np.unique(np.searchsorted(tracking_times, floor_times + 1e-9, side="right") - 1)
+    matched = matched[matched >= 0]
+    walks = (settings.tracking_position_walk_m_per_sqrt_s, settings.tracking_yaw_walk_rad_per_sqrt_s)
+    for t0, t1, increment in _increments(tracking_times[matched], tracking_poses[matched]):
+        if t1 - t0 > settings.tracking_max_gap_s:
+            dropped["tracking: step over a gap"] += 1
+            increment = None
+        events.append(("tracking", t1, increment, t1 - t0, tracking_increment_covariance(*walks, t1 - t0)))
     events.sort(key=lambda event: event[1])
-    start = floor.times[0]
-    fusion = OdometryFusion(start, ProcessNoise(settings.accel_mps2, settings.angular_accel_radps2))
+    start = floor_times[0]
+    fusion = OdometryFusion(
+        start,
+        ProcessNoise(settings.accel_mps2, settings.angular_accel_radps2),
+        biases=settings.bias_model,
+        jitter=(settings.tracking_jitter_m, settings.tracking_jitter_rad),
+    )
     wanted = iter(floor.times[1:])
-    poses, covariances, next_time = [fusion.state[:3]], [fusion.covariance], next(wanted, None)
+    states, covariances, next_time = [fusion.state], [fusion.covariance], next(wanted, None)
     for source, time_s, increment, dt, covariance in events:
         while next_time is not None and next_time < time_s:
             fusion.predict(max(next_time, fusion.time_s))
-            poses.append(fusion.state[:3])
+            states.append(fusion.state)
             covariances.append(fusion.covariance)
             next_time = next(wanted, None)
         if time_s > start:
             fusion.add(source, time_s, increment, dt, covariance)
     while next_time is not None:
         fusion.predict(max(next_time, fusion.time_s))
-        poses.append(fusion.state[:3])
+        states.append(fusion.state)
         covariances.append(fusion.covariance)
         next_time = next(wanted, None)
-    poses = np.array(poses)
-    trajectory = Trajectory.from_planar(floor.stamps_ns, *poses.T, frame_id=floor.frame_id)
-    return FusedPath(trajectory, np.array(covariances), fusion.refused)
+    states = np.array(states)
+    trajectory = Trajectory.from_planar(floor.stamps_ns, *states[:, :3].T, frame_id=floor.frame_id)
+    return FusedPath(trajectory, np.array(covariances), states[:, BIASES], fusion.refused, dict(dropped))
 
 
-def _steps(source: str, path: Trajectory, sigmas, variance_scale: np.ndarray, measured: np.ndarray):
-    """(source, end time s, base_link increment or None where not ``measured``, dt s, covariance (2, 2)) of each
-    step between consecutive distinct stamps of ``path``, its poses taken in the order of their stamps.
-    ``variance_scale`` and ``measured`` (N,) belong to the step into each pose."""
+def floor_variance_scale(inliers: np.ndarray, spread_px: np.ndarray, settings: FusionSettings) -> np.ndarray:
+    """How much each floor step's variance exceeds the reference's (``FusionSettings``): (1 + (q / q_ref)^2) / 2 with
+    q = spread / sqrt(inliers) pixels; 1 where the spread is unknown (NaN)."""
+    quality = spread_px / np.sqrt(np.maximum(inliers, 1.0))
+    reference = settings.floor_reference_spread_px / math.sqrt(settings.floor_reference_inliers)
+    return np.nan_to_num(0.5 * (1.0 + (quality / reference) ** 2), nan=1.0)
+
+
+def _ordered(path, dropped: Counter, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``path``'s stamps (s), planar poses (x, y, theta) and their indices in ``path``, finite poses only, in the order
+    of their stamps, a repeated stamp once (its first message); what was left out or reordered counted in
+    ``dropped``."""
     times = np.asarray(path.times, dtype=float)
-    order = np.argsort(times, kind="stable")
-    order = order[np.r_[True, np.diff(times[order]) > 0]]  # a repeated stamp once, its first message
-    planar = np.column_stack([path.positions[:, :2], path.yaw])[order]
-    increments, times = between(planar[:-1], planar[1:]), times[order]
-    return [
-        (
-            source,
-            times[k + 1],
-            increments[k] if measured[order[k + 1]] else None,
-            times[k + 1] - times[k],
-            increment_covariance(*sigmas, times[k + 1] - times[k]) * variance_scale[order[k + 1]],
-        )
-        for k in range(len(order) - 1)
-    ]
+    poses = np.column_stack([path.positions[:, :2], path.yaw])
+    finite = np.isfinite(poses).all(axis=1) & np.isfinite(times)
+    if not finite.all():
+        dropped[f"{source}: pose not finite"] += int((~finite).sum())
+    index = np.flatnonzero(finite)
+    if np.any(np.diff(times[index]) < 0):
+        dropped[f"{source}: stamp out of order (reordered)"] += int(np.sum(np.diff(times[index]) < 0))
+    index = index[np.argsort(times[index], kind="stable")]
+    repeated = np.r_[False, np.diff(times[index]) == 0]
+    if repeated.any():
+        dropped[f"{source}: stamp repeated"] += int(repeated.sum())
+    index = index[~repeated]
+    if len(index) < 2:
+        raise ValueError(f"the {source} path needs at least two poses with finite values and distinct stamps")
+    return times[index], poses[index], index
+
+
+def _increments(times: np.ndarray, poses: np.ndarray):
+    """(start s, end s, base_link increment) of each step between consecutive ``poses`` at ``times``."""
+    increments = between(poses[:-1], poses[1:])
+    return zip(times[:-1], times[1:], increments, strict=True)

@@ -44,7 +44,7 @@ from gpo.bag import Recording, StampWarning
 from gpo.config import FloorImageSection, read_config, rig_from_config, rig_to_dict
 from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, Keypoints, degenerate, detect, refit
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
-from gpo.fusion import FusionSettings, fuse
+from gpo.fusion import FilterDiverged, FusionSettings, TrackingMount, fuse
 from gpo.ground import FloorImage, RemapTable, analytic_table, ground_plane_image, ortho_rectify, pixels_to_floor
 from gpo.kinematics import (
     PaperBicycle,
@@ -167,7 +167,7 @@ def config_to_dict(config: OdometryConfig) -> dict:
             "rear_to_reference_m": config.model.rear_to_reference_m,
         },
         "odometry": {"method": config.method, "vector": config.vector, "max_gap_s": config.max_gap_s},
-        "fusion": {f.name: getattr(config.fusion, f.name) for f in fields(config.fusion)},
+        "fusion": config.fusion.to_dict(),
         "features": {f.name: getattr(config.features, f.name) for f in fields(config.features)},
     }
 
@@ -446,6 +446,7 @@ class OdometryResult:
     topic: str
     error: str | None = None
     fused: Trajectory | None = None
+    fusion: dict | None = None  # the fused route's own summary: the mount's source, refused and dropped measurements
     interrupted: bool = False
 
     @property
@@ -490,6 +491,7 @@ class OdometryResult:
             "stopped_early": self.error,
             **({"unreadable": unreadable} if unreadable else {}),
             **({"interrupted": True} if self.interrupted else {}),
+            **({"fusion": self.fusion} if self.fusion is not None else {}),
         }
 
     def write(self, tum_path) -> tuple[Path, Path]:
@@ -520,7 +522,10 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
     with Recording(bag) as recording, warnings.catch_warnings():
         warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
         topic = _choose_topic(recording, topic, config.rig)
-        tracking = tracking_path(recording, config.fusion) if config.method == "fused" else None
+        if config.method == "fused":  # the tracking camera's topic, odometry and mount, before any frame
+            _check_tracking_topic(recording, config.fusion)
+            tracking = tracking_path(recording, config.fusion)
+            _, note = tracking_mount(recording, config.fusion)
         started = time.perf_counter()
         frames = (
             (frame.stamp_ns, frame.image if frame.problem is None else Unreadable(frame.problem))
@@ -530,14 +535,29 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
             result = odometry(frames, config, str(bag), topic)
         except ValueError as error:
             raise ValueError(f"{bag}, topic {topic}: {error}") from None
-        if tracking is not None and not result.interrupted:
-            try:
-                result.fused = fused_path(result, tracking, config.fusion)
-            except ValueError as failure:
-                floor = config.fusion.floor_method
-                result.error = f"the fusion failed ({failure}); the trajectory is the floor odometry ({floor}) alone"
+        if config.method == "fused" and not result.interrupted:
+            _fuse_into(result, tracking, config.fusion, note)
             result.seconds = time.perf_counter() - started
     return result
+
+
+def _fuse_into(result: OdometryResult, tracking: Trajectory, settings: FusionSettings, note: str | None) -> None:
+    """Add the EKF's path from the floor odometry of ``result`` and the tracking camera's path of base_link
+    (``tracking_path``) to ``result``; when the tracking stream cannot be fused, say why in ``result.error`` and
+    leave the floor odometry as the result."""
+    kept = [r for r in result.records if r.status != "skipped"]
+    inliers = np.array([r.inliers if r.status == "measured" else 0 for r in kept])
+    spread = np.array([r.spread_px for r in kept])
+    mount = "config (fusion.tracking_mount)" if note == "config" else "/tf_static"
+    result.fusion = {"mount": mount, **({"note": note} if note not in (None, "config") else {})}
+    try:
+        fused = fuse(result.floor_trajectory, inliers, tracking, settings, spread)
+    except (ValueError, FilterDiverged) as failure:
+        reason = f"fusion failed, the floor odometry is the result: {failure}"
+        result.error = reason if result.error is None else f"{result.error}; {reason}"
+        return
+    result.fused = fused.trajectory
+    result.fusion.update(refused_by_nis_gate=fused.refused, dropped=fused.dropped)
 
 
 def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str = "") -> OdometryResult:
@@ -568,19 +588,60 @@ def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str 
 
 def tracking_path(recording: Recording, settings: FusionSettings) -> Trajectory:
     """The recording's tracking-camera odometry as the path of base_link in odom (the origin at its first pose)."""
-    odometry = recording.trajectory(settings.tracking_topic)
-    translation, quaternion = recording.static_transform("base_link", settings.tracking_frame)
-    return base_from_sensor_odometry(
-        odometry, (Rotation.from_quat(quaternion), translation), (Rotation.identity(), np.zeros(3))
-    )
+    try:
+        odometry = recording.trajectory(settings.tracking_topic)
+    except ValueError as error:
+        topic = settings.tracking_topic
+        raise ValueError(f"the tracking camera's odometry on {topic} cannot be read: {error}") from None
+    mount, _ = tracking_mount(recording, settings)
+    return base_from_sensor_odometry(odometry, mount, (Rotation.identity(), np.zeros(3)))
 
 
-def fused_path(result: OdometryResult, tracking: Trajectory, settings: FusionSettings) -> Trajectory:
-    """The EKF's path (``gpo.fusion.fuse``) from the floor odometry of ``result`` and the tracking camera's path of
-    base_link (``tracking_path``)."""
-    kept = [r for r in result.records if r.status != "skipped"]
-    inliers = np.array([r.inliers if r.status == "measured" else 0 for r in kept])
-    return fuse(result.floor_trajectory, inliers, tracking, settings).trajectory
+MOUNT_TOLERANCE = (1e-3, 0.1)  # metres, degrees: a configured mount further than this from /tf_static's is reported
+
+
+def tracking_mount(recording: Recording, settings: FusionSettings) -> tuple[tuple[Rotation, np.ndarray], str | None]:
+    """The tracking camera's pose frame in base_link (rotation, translation m) and where it came from: /tf_static's
+    base_link -> ``tracking_frame`` when the bag has it (then None, or a sentence when ``fusion.tracking_mount``
+    disagrees by more than ``MOUNT_TOLERANCE``), else ``fusion.tracking_mount`` (then "config"). Neither: a
+    ValueError naming both ways."""
+    configured = settings.tracking_mount
+    try:
+        translation, quaternion = recording.static_transform("base_link", settings.tracking_frame)
+    except ValueError as missing:
+        if configured is None:
+            raise ValueError(
+                f"{missing}. The tracking camera's mount is needed one of two ways: a /tf_static transform "
+                f"base_link -> {settings.tracking_frame} in the bag, or fusion: tracking_mount: "
+                f"{{position_m: [x, y, z], rpy_deg: [roll, pitch, yaw]}} in the config (its pose frame, x forward, "
+                "y left, z up, in base_link)"
+            ) from None
+        return _configured_mount(configured), "config"
+    static = (Rotation.from_quat(quaternion), np.asarray(translation, dtype=float))
+    if configured is None:
+        return static, None
+    rotation, position = _configured_mount(configured)
+    moved = float(np.linalg.norm(position - static[1]))
+    turned = float(np.degrees((rotation.inv() * static[0]).magnitude()))
+    if moved > MOUNT_TOLERANCE[0] or turned > MOUNT_TOLERANCE[1]:
+        return static, (
+            f"fusion.tracking_mount is {1e3 * moved:.1f} mm and {turned:.2f} deg from /tf_static's base_link -> "
+            f"{settings.tracking_frame}; /tf_static's is used"
+        )
+    return static, None
+
+
+def _configured_mount(mount: TrackingMount) -> tuple[Rotation, np.ndarray]:
+    return Rotation.from_euler("xyz", mount.rpy_deg, degrees=True), np.array(mount.position_m)
+
+
+def _check_tracking_topic(recording: Recording, settings: FusionSettings) -> None:
+    topics = {t.name: t for t in recording.topics()}
+    if settings.tracking_topic not in topics:
+        raise ValueError(
+            f"{recording.path}: no topic {settings.tracking_topic} for the tracking camera's odometry "
+            f"(fusion.tracking_topic); the bag has {', '.join(sorted(topics))}"
+        )
 
 
 def _choose_topic(recording: Recording, topic: str | None, rig: Rig) -> str:

@@ -537,22 +537,26 @@ def bicycle_panel(wheelbase_m: float = 0.8, rear_to_reference_m: float = 0.8, ra
 FUSION_SLIDERS = {  # FusionSettings field -> (slider label, log10 of its lowest and highest value)
     "floor_speed_sigma_mps": ("floor sigma v [m/s]", -4.0, 0.0),
     "floor_turn_sigma_radps": ("floor sigma omega [rad/s]", -4.0, 0.0),
-    "tracking_speed_sigma_mps": ("camera sigma v [m/s]", -3.0, 1.0),
-    "tracking_turn_sigma_radps": ("camera sigma omega [rad/s]", -3.0, 1.0),
+    "tracking_position_walk_m_per_sqrt_s": ("camera position walk [m/sqrt(s)]", -4.0, 0.0),
+    "tracking_yaw_walk_rad_per_sqrt_s": ("camera yaw walk [rad/sqrt(s)]", -5.0, -1.0),
     "accel_mps2": ("accel [m/s^2/sqrt(Hz)]", -2.0, 2.0),
     "angular_accel_radps2": ("angular accel [rad/s^2/sqrt(Hz)]", -2.0, 2.0),
 }
 
 
-def fusion_panel(floor, tracking, truth, settings: FusionSettings | None = None) -> widgets.VBox:
-    """The EKF's noise parameters on log-scale sliders (``FUSION_SLIDERS``): the sigmas of the floor's and the tracking
-    camera's (v, omega) measurements and the process noise; on each release ``gpo.fusion.fuse`` runs again.
+def fusion_panel(floor, tracking, truth, settings: FusionSettings | None = None, drifted=None) -> widgets.VBox:
+    """The EKF's noise parameters on log-scale sliders (``FUSION_SLIDERS``): the sigmas of the floor's (v, omega), the
+    tracking camera's random walks and the process noise; a floor outage (its start and length, seconds: the floor's
+    steps inside it not fused); and, when ``drifted`` is given, the tracking camera's drift (scale error %, yaw bias
+    mrad/s). On each release ``gpo.fusion.fuse`` runs again.
 
     ``floor``: the floor odometry with its flow's inlier counts (a ``gpo.sim.table4.FloorRun``, or anything with its
-    ``trajectory`` and ``inliers``); ``tracking``: the tracking camera's path of base_link; ``truth``: the true path;
-    ``settings``: the ``FusionSettings`` the sliders start from (default: the package's). Left, the three paths placed
-    on the truth at their first pose; right, their position error along the way. One line reads out the fused path's
-    final error (``gpo.metrics.final_error``) and how many measurements the NIS gate refused.
+    ``trajectory``, ``inliers`` and ``spread_px``); ``tracking``: the tracking camera's path of base_link;
+    ``truth``: the true path; ``settings``: the ``FusionSettings`` the sliders start from (default: the package's);
+    ``drifted(scale_error, yaw_bias_radps)``: the tracking camera's path with that drift (then ``tracking`` is unused).
+    Left, the three paths placed on the truth at their first pose; right, their position error along the way. One
+    line reads out the fused path's final error (``gpo.metrics.final_error``), the camera's biases as the filter
+    estimated them, and how many measurements the NIS gate refused.
     """
     base = settings or FusionSettings()
     style = {"description_width": "initial"}
@@ -570,27 +574,38 @@ def fusion_panel(floor, tracking, truth, settings: FusionSettings | None = None)
         )
         for name, (label, low, high) in FUSION_SLIDERS.items()
     }
-    sources = {"tracking camera": tracking, "floor": floor.trajectory}
+    seconds = floor.trajectory.times - floor.trajectory.times[0]
+    controls["outage_start"] = _slider("outage from [s]", 0.0, 0.0, float(seconds[-1]), 0.5)
+    controls["outage_length"] = _slider("outage length [s]", 0.0, 0.0, 5.0, 0.5)
+    if drifted is not None:
+        controls["scale_percent"] = _slider("camera scale error [%]", 2.0, -5.0, 5.0, 0.5)
+        controls["yaw_bias_mradps"] = _slider("camera yaw bias [mrad/s]", 1.0, -5.0, 5.0, 0.5)
     styles = {"tracking camera": {"color": "tab:orange"}, "floor": {"color": "tab:blue"}, "fused": {"color": "tab:red"}}
+    spread = getattr(floor, "spread_px", None)
 
-    def redraw(**sigmas: float) -> None:
+    def redraw(outage_start, outage_length, scale_percent=None, yaw_bias_mradps=None, **sigmas: float) -> None:
         chosen = dataclasses.replace(base, **sigmas)
+        camera = tracking if drifted is None else drifted(scale_percent / 100, yaw_bias_mradps / 1e3)
+        inliers = np.where((seconds >= outage_start) & (seconds < outage_start + outage_length), 0, floor.inliers)
         plt.close("all")
         try:
-            fused = fuse(floor.trajectory, floor.inliers, tracking, chosen)
+            fused = fuse(floor.trajectory, inliers, camera, chosen, spread)
         except FilterDiverged as error:
             print(f"no fused path: {error}")
             return
-        paths = {**sources, "fused": fused.trajectory}
+        paths = {"tracking camera": camera, "floor": floor.trajectory, "fused": fused.trajectory}
         _, (left, right) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1, 1.2]})
         draw_paths_on_truth(paths, truth, ax=left, styles=styles)
         left.set_title("the paths, each placed on the truth at its start")
         draw_position_errors(paths, truth, ax=right, styles=styles)
-        right.set_title("how far from the truth, along the way")
+        gap = f" (no floor {outage_start:.1f}-{outage_start + outage_length:.1f} s)" if outage_length > 0 else ""
+        right.set_title(f"how far from the truth, along the way{gap}")
         error = final_error(fused.trajectory, truth)
+        scale, yaw_bias = fused.biases[-1]
         print(
             f"fused: final error {1e3 * error.position_m:.1f} mm ({error.percent:.2f} % of {error.distance_m:.2f} m), "
-            f"heading {math.degrees(error.heading_rad):+.2f} deg; the NIS gate refused {fused.refused} measurement(s)"
+            f"heading {math.degrees(error.heading_rad):+.2f} deg; camera scale {100 * scale:+.2f} %, yaw bias "
+            f"{1e3 * yaw_bias:+.2f} mrad/s as estimated; the NIS gate refused {fused.refused} measurement(s)"
         )
         plt.show()
 

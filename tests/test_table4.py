@@ -45,7 +45,7 @@ def _kept_files(folder):
 def test_each_row_holds_the_final_error_of_the_run_made_here(sample, table):
     bag, truth, tracking = sample
     floor = floor_run(bag, route_config("gpo-exact", "analytic"), cache=False)  # computed now, not read back
-    fused = fuse(floor.trajectory, floor.inliers, tracking, load_config().fusion).trajectory
+    fused = fuse(floor.trajectory, floor.inliers, tracking, load_config().fusion, floor.spread_px).trajectory
     for row, estimate in ((CAMERA, tracking), (FLOOR, floor.trajectory), (FUSED, fused)):
         expected, found = final_error(estimate, truth), table.evaluations[row]["sample"].final
         assert found.position_m == pytest.approx(expected.position_m, abs=1e-9), row.label
@@ -76,6 +76,9 @@ def test_the_floor_rows_final_error_by_hand(sample, table):
     assert final.distance_m == pytest.approx(distance, abs=1e-9)
     assert final.percent == pytest.approx(100 * final.position_m / distance, abs=1e-9)
     assert final.heading_rad == pytest.approx(np.angle(np.exp(1j * (yaw[-1] + turn - true_yaw[-1]))), abs=1e-9)
+    mean = np.linalg.norm(placed - true_positions[:, :2], axis=1).mean()  # the paper's mean localization error
+    assert table.mean_errors_m()[1, 0] == pytest.approx(mean, abs=1e-9)
+    assert f"{mean:9.3f}{mean:9.3f}{final.position_m:13.3f}" in table.format_mean().splitlines()[2]
 
 
 def test_the_text_names_every_row_and_path_with_its_numbers(table):
@@ -128,3 +131,15 @@ def test_each_config_is_kept_in_its_own_file(sample, empty_cache):
     assert len(names) == 3
     assert sum("-gpo-exact-analytic-" in name for name in names) == 2
     assert sum("-gpo-rigid-analytic-" in name for name in names) == 1
+
+
+def test_a_drifted_tracking_camera_is_the_bags_own_for_the_bags_drift(sample):
+    """``drifted_tracking`` makes the recording's tracking stream without rendering: for the preset's own drift and
+    seed it is the bag's, to the nanometre."""
+    from gpo.sim.motion import T265_DRIFT
+    from gpo.sim.record import PRESETS
+
+    _, _, tracking = sample
+    again = table4.drifted_tracking("sample", T265_DRIFT, PRESETS["sample"].seed)
+    np.testing.assert_array_equal(again.stamps_ns, tracking.stamps_ns)
+    np.testing.assert_allclose(again.positions, tracking.positions, rtol=0, atol=1e-9)

@@ -59,7 +59,7 @@ def test_panel_draws_and_reads_out_the_fused_path(sources, capsys):
     floor, tracking, truth = sources
     panel = fusion_panel(floor, tracking, truth)
     assert {control.description for control in _controls(panel).values()} == {
-        label for label, _, _ in FUSION_SLIDERS.values()
+        *(label for label, _, _ in FUSION_SLIDERS.values()), "outage from [s]", "outage length [s]"
     }
     assert all(not control.continuous_update for control in _controls(panel).values())
     printed = capsys.readouterr().out
@@ -95,7 +95,36 @@ def test_each_slider_reaches_the_filter(sources, capsys):
     assert controls["accel [m/s^2/sqrt(Hz)]"].value == pytest.approx(0.2)
     capsys.readouterr()
     for label, control in controls.items():
+        if label.startswith("outage"):
+            continue
         before = _fused_line(plt.gcf().axes[0])
         control.value = control.value * 30
         assert "fused: final error" in capsys.readouterr().out, label
         assert np.abs(_fused_line(plt.gcf().axes[0]) - before).max() > 1e-9, label  # the fused path moved
+
+
+def test_the_outage_and_drift_sliders_reach_the_filter(sources, capsys):
+    """An outage leaves the floor's steps inside it out, exactly as ``fuse`` with their inliers at zero; the drift
+    sliders ask ``drifted`` for a camera path with that scale error and yaw bias, and the filter estimates them."""
+    floor, tracking, truth = sources
+    asked = []
+
+    def drifted(scale_error, yaw_bias_radps):
+        asked.append((scale_error, yaw_bias_radps))
+        return _arc(200.0, sigma=(0.02, 0.02), scale=1 + scale_error, seed=2)
+
+    panel = fusion_panel(floor, tracking, truth, drifted=drifted)
+    controls = _controls(panel)
+    assert asked[-1] == pytest.approx((0.02, 1e-3))
+    controls["camera scale error [%]"].value = -3.0
+    assert asked[-1] == pytest.approx((-0.03, 1e-3))
+    capsys.readouterr()
+    controls["outage from [s]"].value = 0.5
+    controls["outage length [s]"].value = 1.0
+    printed = capsys.readouterr().out.splitlines()[-1]
+    seconds = floor.trajectory.times - floor.trajectory.times[0]
+    inliers = np.where((seconds >= 0.5) & (seconds < 1.5), 0, floor.inliers)
+    camera = drifted(-0.03, 1e-3)
+    expected = fuse(floor.trajectory, inliers, camera, FusionSettings())
+    assert _final_mm(printed) == pytest.approx(1e3 * final_error(expected.trajectory, truth).position_m, abs=0.051)
+    assert f"camera scale {100 * expected.biases[-1, 0]:+.2f} %" in printed

@@ -35,6 +35,7 @@ from gpo.bag import BagWriter
 from gpo.rig import Rig
 from gpo.sim.floors import make_floor
 from gpo.sim.motion import T265_DRIFT, MotionPlan, named_plan, tracking_odometry
+from gpo.sim.outages import Outage, apply_outage, outage_at
 from gpo.sim.render import Disturbances, FloorRenderer
 from gpo.sim.rigs import RIGS
 from gpo.targets import Chessboard, FloorBoard
@@ -53,6 +54,7 @@ class Preset:
 
     ``exposure_s`` > 0 blurs each frame over that exposure (``blur_samples`` poses averaged).
     ``disturbances`` put moving sheets and glints in the camera's view (none by default).
+    ``outages`` (``gpo.sim.outages.Outage``) are stretches where the floor cannot be measured (none by default).
     """
 
     rig: str
@@ -63,6 +65,7 @@ class Preset:
     exposure_s: float = 0.0
     blur_samples: int = 3
     disturbances: Disturbances = field(default_factory=Disturbances)
+    outages: tuple[Outage, ...] = ()
 
 
 PRESETS = {
@@ -109,6 +112,24 @@ PRESETS = {
         )
     },
 }
+# Floor outages: the long paths again (same motion, floor, seed and tracking camera), with four stretches where the
+# floor cannot be measured, 6 s in all (12-14 % of the frames)
+FLOOR_OUTAGES = (
+    Outage("textureless", 6.0, 3.0),
+    Outage("glare", 16.0, 1.5),
+    Outage("fast", 27.0, 0.5),
+    Outage("lifted", 37.0, 1.0),
+)
+PRESETS.update(
+    {
+        f"long{k}-outages": dataclasses.replace(
+            PRESETS[f"long{k}"],
+            description=f"long{k}, the floor unmeasurable 4 times, 6 s in all (no texture, glare, too fast, lifted)",
+            outages=FLOOR_OUTAGES,
+        )
+        for k in (1, 2, 3)
+    }
+)
 
 
 def preset(name: str) -> Preset:
@@ -162,7 +183,9 @@ class Scene:
     def frame(self, index: int) -> np.ndarray:
         """Camera frame ``index`` (uint8), the same whoever renders it and in whatever order."""
         times, poses = _exposure(self.plan, self.frame_times[index], self.chosen)
-        return self.renderer.render(poses, frame_seed=(self.chosen.seed, index), times_s=times)
+        image = self.renderer.render(poses, frame_seed=(self.chosen.seed, index), times_s=times)
+        outage = outage_at(self.chosen.outages, self.frame_times[index])
+        return image if outage is None else apply_outage(outage.kind, image)
 
 
 def simulate(
@@ -246,7 +269,7 @@ def fingerprint_sources() -> list[Path]:
     """
     package = Path(__file__).resolve().parents[1]
     return [
-        *(package / "sim" / f"{name}.py" for name in ("floors", "motion", "record", "render", "rigs")),
+        *(package / "sim" / f"{name}.py" for name in ("floors", "motion", "outages", "record", "render", "rigs")),
         *(package / f"{name}.py" for name in ("bag", "camera", "rig", "targets", "trajectory")),
     ]
 

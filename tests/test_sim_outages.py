@@ -1,0 +1,58 @@
+"""Floor outages: each kind makes the floor odometry flag the frame instead of measuring a wrong motion."""
+
+import numpy as np
+import pytest
+
+from gpo.pipeline import FloorOdometer, load_config
+from gpo.sim.floors import make_floor
+from gpo.sim.motion import named_plan
+from gpo.sim.outages import KINDS, Outage, apply_outage, outage_at, outage_fraction
+from gpo.sim.record import FLOOR_OUTAGES, PRESETS
+from gpo.sim.render import FloorRenderer
+from gpo.sim.rigs import RIGS
+
+
+@pytest.fixture(scope="module")
+def frames():
+    """Three frames of the fisheye rig driving 0.4 m/s straight over the raised floor, 30 Hz."""
+    rig = RIGS["t265"]()
+    renderer = FloorRenderer(rig, make_floor("raised", (-1.0, 2.0, -1.0, 1.0), 1e-3, 5))
+    return [renderer.render(np.array([0.4 * k / 30, 0.0, 0.0]), frame_seed=k) for k in range(3)]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_every_outage_is_flagged_and_the_floor_is_measured_again_after_it(frames, kind):
+    odometer = FloorOdometer(load_config())
+    stamps = [round(k * 1e9 / 30) for k in range(3)]
+    assert odometer.step(stamps[0], frames[0]).status == "first"
+    hidden = odometer.step(stamps[1], apply_outage(kind, frames[1]))
+    assert hidden.status == "coasted" and hidden.flag
+    after = odometer.step(stamps[2], frames[2])
+    assert after.status in ("coasted", "measured")  # the frame after may still be compared with the hidden one
+
+
+def test_the_clean_frames_are_measured(frames):
+    odometer = FloorOdometer(load_config())
+    records = [odometer.step(round(k * 1e9 / 30), frame) for k, frame in enumerate(frames)]
+    assert [r.status for r in records] == ["first", "measured", "measured"]
+    assert abs(records[-1].pose[0] - 0.4 * 2 / 30) < 1e-3
+
+
+def test_outage_presets_hide_at_least_a_tenth_of_each_long_path():
+    for k in (1, 2, 3):
+        chosen = PRESETS[f"long{k}-outages"]
+        assert chosen.outages == FLOOR_OUTAGES and chosen.path == f"long{k}" and chosen.seed == PRESETS[f"long{k}"].seed
+        times = np.arange(0.0, named_plan(chosen.path).duration_s, 1 / 30)
+        assert outage_fraction(chosen.outages, times) >= 0.10
+    assert all(0.5 <= o.duration_s <= 3.0 for o in FLOOR_OUTAGES)
+    assert {o.kind for o in FLOOR_OUTAGES} == set(KINDS)
+
+
+def test_outage_lookup_and_bad_outages():
+    outages = (Outage("glare", 1.0, 0.5),)
+    assert outage_at(outages, 0.99) is None and outage_at(outages, 1.5) is None
+    assert outage_at(outages, 1.0) == outages[0]
+    with pytest.raises(ValueError, match="unknown outage kind 'fog'"):
+        Outage("fog", 0.0, 1.0)
+    with pytest.raises(ValueError, match="duration_s > 0"):
+        Outage("glare", 0.0, 0.0)
