@@ -132,7 +132,8 @@ def floor_run(bag, config: OdometryConfig, cache: bool = True) -> FloorRun:
         with np.load(path) as kept:
             poses = kept["poses"]
             trajectory = Trajectory.from_planar(kept["stamps_ns"], *poses.T, frame_id="odom")
-            return FloorRun(trajectory, kept["inliers"], float(kept["frames_per_second"]), kept["spread_px"])
+            spread = kept["spread_px"] if "spread_px" in kept.files else None  # kept before spreads were
+            return FloorRun(trajectory, kept["inliers"], float(kept["frames_per_second"]), spread)
     result = run(bag, config, progress=False)
     if result.error:
         raise ValueError(f"{bag}: the floor run stopped early, {result.error}")
