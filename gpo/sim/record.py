@@ -270,7 +270,10 @@ def fingerprint_sources() -> list[Path]:
     package = Path(__file__).resolve().parents[1]
     return [
         *(package / "sim" / f"{name}.py" for name in ("floors", "motion", "outages", "record", "render", "rigs")),
-        *(package / f"{name}.py" for name in ("bag", "camera", "rig", "targets", "trajectory")),
+        *(
+            package / f"{name}.py"
+            for name in ("bag", "calibfiles", "camera", "fisheye", "rig", "targets", "trajectory")
+        ),
     ]
 
 
