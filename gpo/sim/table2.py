@@ -24,9 +24,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import hashlib
-import json
-import os
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -35,11 +32,12 @@ from pathlib import Path
 import numpy as np
 
 import gpo
+import gpo.cache
 from gpo.bag import Recording
 from gpo.metrics import PaperTable2, evaluate, paper_table2
 from gpo.pipeline import FloorOdometer, OdometryConfig, OdometryResult, config_to_dict, load_config
 from gpo.sim.motion import Stop, named_plan
-from gpo.sim.record import GROUND_TRUTH_TOPIC, START_NS, cache_dir, preset, recording
+from gpo.sim.record import GROUND_TRUTH_TOPIC, START_NS, preset, recording
 from gpo.sim.rigs import RIGS
 from gpo.sim.table4 import RUN_MODULES, FloorRun, floor_run
 from gpo.trajectory import Trajectory
@@ -191,27 +189,25 @@ def _load(path: Path) -> ExperimentRun | None:
 
 
 def _save(path: Path, run: ExperimentRun) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f"{path.stem}-partial-{os.getpid()}.npz")
+    """Keep ``run`` in the cache file ``path`` (``gpo.cache.write``: a name of its own, then renamed)."""
     planar, truth = (np.column_stack([t.positions[:, :2], t.yaw]) for t in (run.trajectory, run.truth))
-    np.savez(
-        partial,
-        stamps_ns=run.trajectory.stamps_ns,
-        poses=planar,
-        frames=run.frames,
-        frames_per_second=run.frames_per_second,
-        truth_stamps_ns=run.truth.stamps_ns,
-        truth_poses=truth,
-    )
-    partial.replace(path)
+    arrays = {
+        "stamps_ns": run.trajectory.stamps_ns,
+        "poses": planar,
+        "frames": run.frames,
+        "frames_per_second": run.frames_per_second,
+        "truth_stamps_ns": run.truth.stamps_ns,
+        "truth_poses": truth,
+    }
+    gpo.cache.write(path, lambda partial: np.savez(partial, **arrays))
 
 
 def _run_path(bag: Path, chosen: Experiment, config: OdometryConfig) -> Path:
-    digest = hashlib.sha256(json.dumps([bag.name, chosen.truth, config_to_dict(config)], sort_keys=True).encode())
+    """The cache file of the run of ``config`` on ``bag``: keyed by the recording, the truth's sampling, the whole
+    config and the sources of every module a run goes through."""
     package = Path(gpo.__file__).parent
-    for module in RUN_MODULES:
-        digest.update((package / module).read_bytes())
-    return cache_dir() / "runs" / f"{bag.stem}-{chosen.truth}-{digest.hexdigest()[:12]}.npz"
+    key = gpo.cache.key(bag.name, chosen.truth, config_to_dict(config), sources=[package / m for m in RUN_MODULES])
+    return gpo.cache.path("runs", f"{bag.stem}-{chosen.truth}", key, ".npz")
 
 
 @dataclass(frozen=True)
