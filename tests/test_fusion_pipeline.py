@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+import gpo.pipeline
 from gpo.bag import BagWriter, Recording
 from gpo.fusion import FusionSettings, TrackingMount
 from gpo.pipeline import load_config, run, save_config, tracking_mount, tracking_path
@@ -90,12 +91,10 @@ def test_the_fused_route_runs_with_the_config_mount_and_reports_it(tmp_path):
     assert summary["fusion"]["refused_by_nis_gate"] == 0
 
 
-def test_unreadable_tracking_poses_leave_the_floor_odometry_written(tmp_path):
-    result = run(_bag(tmp_path, nan=True), _fused_config(), progress=False)
-    assert result.fused is None and "fusion failed" in result.error
-    assert len(result.trajectory) == 5  # the floor odometry
-    tum, _ = result.write(tmp_path / "out.tum")
-    assert len([line for line in tum.read_text().splitlines() if not line.startswith("#")]) == 5
+def test_unreadable_tracking_poses_are_refused_before_the_first_frame(tmp_path, monkeypatch):
+    monkeypatch.setattr(gpo.pipeline, "odometry", lambda *a, **k: pytest.fail("frames were read"))
+    with pytest.raises(ValueError, match=r"tracking camera's odometry on /camera/odom/sample cannot be read: .*finite"):
+        run(_bag(tmp_path, nan=True), _fused_config(), progress=False)
 
 
 def test_the_tracking_mount_goes_through_the_config_file_and_bad_ones_are_refused(tmp_path):
