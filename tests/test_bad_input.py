@@ -510,6 +510,12 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
+def _as_from_a_terminal():
+    """In the child, before it starts: Ctrl-C's default disposition, as a command typed in a terminal has it (a test
+    process may run with SIGINT ignored, which its children inherit, and Python then installs no handler for it)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_to_the_process_keeps_the_frames_done(world, tmp_path, signum):
     """A real process, its frames slowed to 4 a second, is sent the signal while it reads them."""
@@ -517,7 +523,8 @@ def test_a_signal_to_the_process_keeps_the_frames_done(world, tmp_path, signum):
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])}
     arguments = ["run", world.bag(), "--config", world.config, "--out", out]
     command = [sys.executable, "-c", SLOW_MAIN, *map(str, arguments)]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True)
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True,
+                               preexec_fn=_as_from_a_terminal)
     seen = ""
     while "| 2/12" not in seen and process.poll() is None:  # the progress bar: frames are being read
         seen += process.stderr.read(1)
