@@ -105,50 +105,32 @@ def camera_from_kalibr(entry: Mapping, where: str) -> Camera:
 
 def camera_to_kalibr(camera: Camera, name: str) -> dict:
     """One Kalibr camchain entry (without ``rostopic``) for ``camera``; ``name`` names it in error messages."""
+    pinhole = [camera.fx, camera.fy, camera.cx, camera.cy]
     if isinstance(camera, EUCM):
-        return {
-            "camera_model": "eucm",
-            "intrinsics": [camera.alpha, camera.beta, camera.fx, camera.fy, camera.cx, camera.cy],
-            "distortion_model": "none",
-            "distortion_coeffs": [],
-            "resolution": [camera.width, camera.height],
-        }
+        return _kalibr_entry(camera, "eucm", [camera.alpha, camera.beta, *pinhole], "none", [])
     if isinstance(camera, DoubleSphere):
-        return {
-            "camera_model": "ds",
-            "intrinsics": [camera.xi, camera.alpha, camera.fx, camera.fy, camera.cx, camera.cy],
-            "distortion_model": "none",
-            "distortion_coeffs": [],
-            "resolution": [camera.width, camera.height],
-        }
+        return _kalibr_entry(camera, "ds", [camera.xi, camera.alpha, *pinhole], "none", [])
     if isinstance(camera, KB4):
-        return {
-            "camera_model": "pinhole",
-            "intrinsics": [camera.fx, camera.fy, camera.cx, camera.cy],
-            "distortion_model": "equidistant",
-            "distortion_coeffs": list(camera.dist),
-            "resolution": [camera.width, camera.height],
-        }
+        return _kalibr_entry(camera, "pinhole", pinhole, "equidistant", list(camera.dist))
     if isinstance(camera, Pinhole):
         k1, k2, p1, p2, *rest = camera.dist
         if rest and rest[0] != 0.0:
             raise ValueError(f"{name}: Kalibr's radtan has no k3, but this camera has k3 = {rest[0]}")
-        return {
-            "camera_model": "pinhole",
-            "intrinsics": [camera.fx, camera.fy, camera.cx, camera.cy],
-            "distortion_model": "radtan",
-            "distortion_coeffs": [k1, k2, p1, p2],
-            "resolution": [camera.width, camera.height],
-        }
+        return _kalibr_entry(camera, "pinhole", pinhole, "radtan", [k1, k2, p1, p2])
     if isinstance(camera, Omni):
-        return {
-            "camera_model": "omni",
-            "intrinsics": [camera.xi, camera.fx, camera.fy, camera.cx, camera.cy],
-            "distortion_model": "radtan",
-            "distortion_coeffs": list(camera.dist),
-            "resolution": [camera.width, camera.height],
-        }
+        return _kalibr_entry(camera, "omni", [camera.xi, *pinhole], "radtan", list(camera.dist))
     raise TypeError(f"{name}: cannot write a {type(camera).__name__} as a Kalibr camera")
+
+
+def _kalibr_entry(camera: Camera, model: str, intrinsics: list, distortion: str, coeffs: list) -> dict:
+    """A Kalibr camchain entry: its model, intrinsics and distortion, and the camera's resolution."""
+    return {
+        "camera_model": model,
+        "intrinsics": intrinsics,
+        "distortion_model": distortion,
+        "distortion_coeffs": coeffs,
+        "resolution": [camera.width, camera.height],
+    }
 
 
 def save_kalibr(path, cameras: Mapping[str, Camera], rostopics: Mapping[str, str] | None = None) -> Path:
