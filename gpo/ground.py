@@ -730,19 +730,20 @@ def route_difference(table: RemapTable, reference: RemapTable) -> RouteDifferenc
 class BlockMeasurement:
     """The four sides (a, b, c, d) metres and the area m^2 of a 2 x 4-square block measured in a floor image.
 
-    a and c are the short sides (2 squares), b and d the long ones (4 squares), in turn around the block.
+    a and c are the long sides (4 squares), b and d the short ones (2 squares), in turn around the block: the
+    paper's labels (its Fig. 11 and Table 1, where (a + c) / 2 is 4 x 20.007 mm).
     """
 
     sides_m: tuple[float, float, float, float]
     area_m2: float
 
     @property
-    def short_m(self) -> float:
+    def long_m(self) -> float:
         """(a + c) / 2, metres."""
         return 0.5 * (self.sides_m[0] + self.sides_m[2])
 
     @property
-    def long_m(self) -> float:
+    def short_m(self) -> float:
         """(b + d) / 2, metres."""
         return 0.5 * (self.sides_m[1] + self.sides_m[3])
 
@@ -756,7 +757,7 @@ def measure_block(
     the plain GPI its nominal scale), the area by the shoelace formula.
     """
     grid = block_corner_indices(placement.board, block).reshape(BLOCK_SQUARES[1] + 1, BLOCK_SQUARES[0] + 1)
-    outline = [grid[0, 0], grid[-1, 0], grid[-1, -1], grid[0, -1]]  # a short side first, then round the block
+    outline = [grid[0, 0], grid[0, -1], grid[-1, -1], grid[-1, 0]]  # a long side first, then round the block
     corners = floor.pixel_to_base(board_corners(image, floor, placement)[outline])
     sides = np.linalg.norm(np.roll(corners, -1, axis=0) - corners, axis=1)
     x, y = corners[:, 0], corners[:, 1]
