@@ -143,3 +143,22 @@ def test_a_drifted_tracking_camera_is_the_bags_own_for_the_bags_drift(sample):
     again = table4.drifted_tracking("sample", T265_DRIFT, PRESETS["sample"].seed)
     np.testing.assert_array_equal(again.stamps_ns, tracking.stamps_ns)
     np.testing.assert_allclose(again.positions, tracking.positions, rtol=0, atol=1e-9)
+
+
+def test_the_fusion_accuracy_text_gives_each_presets_median_and_worst_and_the_outage_count():
+    runs = [
+        {"preset": preset, "floor_final_percent": floor, "camera_final_percent": camera, "fused_final_percent": fused}
+        for preset, floor, camera, fused in (
+            ("long1", 0.04, 1.0, 0.03), ("long1", 0.04, 3.0, 0.05), ("long1", 0.04, 2.0, 0.04),
+            ("long1-outages", 16.0, 1.0, 0.10), ("long1-outages", 16.0, 2.0, 0.40),
+        )
+    ]
+    summary = {"runs_within": "3/3", "worst_ratio": 1.25, "worst_excess_percent": 0.01}
+    text = table4.format_fusion_accuracy({"runs": runs, "summary": summary})
+    lines = text.splitlines()
+    assert lines[1].split() == ["long1", "3", "0.04", "2.00", "0.040", "0.050"]
+    assert lines[2].split() == ["long1-outages", "2", "16.00", "1.50", "0.250", "0.400"]
+    assert "in 3/3 runs (worst 1.250 x" in text
+    assert lines[-1] == "with floor outages, fused at most 0.400 % (target 0.3 %: met in 1 of 2 runs)"
+    outages_only = table4.format_fusion_accuracy({"runs": runs, "summary": summary}, outages_only=True)
+    assert "long1 " not in outages_only and "1.1 x" not in outages_only

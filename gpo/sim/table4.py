@@ -254,3 +254,31 @@ def reproduce_table4(paths=PATHS, rows=ROWS, base: OdometryConfig | None = None,
             evaluations[row][path] = evaluate(estimate, truth)
     rates = {row: float(np.mean(values)) if values else float("nan") for row, values in speeds.items()}
     return Table4(tuple(rows), tuple(paths), evaluations, rates)
+
+
+def format_fusion_accuracy(results: dict, outages_only: bool = False) -> str:
+    """The fused row against its sources over many drifts of the tracking camera, as rounded text.
+
+    ``results`` is what ``benchmarks/fusion_accuracy.py --write`` saves: per run the preset, the final errors (% of
+    the distance) of the floor alone, the camera alone and the EKF; its summary, the worst against the targets
+    (fused <= 1.1 x the better source, never more than 0.02 % above it; with floor outages, fused <= 0.3 %).
+    ``outages_only``: the presets with floor outages alone.
+    """
+    runs = [run for run in results["runs"] if run["preset"].endswith("-outages") or not outages_only]
+    lines = [f"{'[% of the distance]':<22}{'runs':>5}{'floor':>8}{'camera, median':>16}{'fused, median':>15}"
+             f"{'worst':>8}"]
+    for preset in dict.fromkeys(run["preset"] for run in runs):
+        chosen = [run for run in runs if run["preset"] == preset]
+        fused = [run["fused_final_percent"] for run in chosen]
+        lines.append(f"{preset:<22}{len(chosen):5d}{np.median([run['floor_final_percent'] for run in chosen]):8.2f}"
+                     f"{np.median([run['camera_final_percent'] for run in chosen]):16.2f}"
+                     f"{np.median(fused):15.3f}{max(fused):8.3f}")
+    summary = results["summary"]
+    if not outages_only:
+        lines.append(f"where both sources work, fused <= 1.1 x the better source in {summary['runs_within']} runs "
+                     f"(worst {summary['worst_ratio']:.3f} x, at most {summary['worst_excess_percent']:.4f} % above "
+                     "it; targets 1.1 x and 0.02 %)")
+    outages = [run["fused_final_percent"] for run in results["runs"] if run["preset"].endswith("-outages")]
+    lines.append(f"with floor outages, fused at most {max(outages):.3f} % (target 0.3 %: met in "
+                 f"{sum(value <= 0.3 for value in outages)} of {len(outages)} runs)")
+    return "\n".join(lines)
