@@ -267,7 +267,7 @@ def format_fusion_accuracy(results: dict, outages_only: bool = False) -> str:
     runs = [run for run in results["runs"] if run["preset"].endswith("-outages") or not outages_only]
     lines = [f"{'[% of the distance]':<22}{'runs':>5}{'floor':>8}{'camera, median':>16}{'fused, median':>15}"
              f"{'worst':>8}"]
-    for preset in dict.fromkeys(run["preset"] for run in runs):
+    for preset in dict.fromkeys(entry["preset"] for entry in runs):
         chosen = [run for run in runs if run["preset"] == preset]
         fused = [run["fused_final_percent"] for run in chosen]
         lines.append(f"{preset:<22}{len(chosen):5d}{np.median([run['floor_final_percent'] for run in chosen]):8.2f}"
