@@ -14,7 +14,6 @@ distance and a heading RMSE at most 1.4 degrees; the default configuration at le
 
 import argparse
 import dataclasses
-import json
 import math
 from pathlib import Path
 
@@ -22,6 +21,7 @@ import cv2
 
 from gpo.bag import Recording
 from gpo.metrics import evaluate, final_error
+from gpo.outputs import write_json
 from gpo.pipeline import load_config, run
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
@@ -82,9 +82,7 @@ def main() -> None:
                   f"{row['frames_per_second']:9.1f}")
     print("targets (downward-long, default):", ", ".join(f"{k} {v}" for k, v in TARGETS.items()))
     if args.write:
-        args.write.parent.mkdir(parents=True, exist_ok=True)
-        args.write.write_text(json.dumps(rows, indent=1) + "\n")
-        print(f"wrote {args.write}")
+        print(f"wrote {write_json(args.write, rows)}")
 
 
 if __name__ == "__main__":

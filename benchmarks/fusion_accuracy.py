@@ -27,6 +27,7 @@ import numpy as np
 
 from gpo.fusion import fuse
 from gpo.metrics import evaluate
+from gpo.outputs import write_json
 from gpo.pipeline import load_config
 from gpo.sim.motion import T265_DRIFT, TrackingDrift, named_plan
 from gpo.sim.record import PRESETS, START_NS, recording
@@ -125,7 +126,7 @@ def main() -> None:
     summary = {**verdict(rows), "fuse_on_sample_s": round(seconds, 3), "fuse_target_met": seconds <= FUSE_TARGET_S}
     print(json.dumps(summary, indent=1))
     if args.write:
-        args.write.write_text(json.dumps({"summary": summary, "runs": rows}, indent=1) + "\n")
+        print(f"wrote {write_json(args.write, {'summary': summary, 'runs': rows})}")
 
 
 if __name__ == "__main__":

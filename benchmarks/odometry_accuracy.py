@@ -15,7 +15,6 @@ none for the camera. ``--write`` keeps the numbers as JSON (``benchmarks/results
 """
 
 import argparse
-import json
 import math
 import tempfile
 from pathlib import Path
@@ -23,6 +22,7 @@ from pathlib import Path
 from gpo.bag import Recording
 from gpo.batch import Run, cluster_client, sweep
 from gpo.metrics import final_error
+from gpo.outputs import write_json
 from gpo.pipeline import METHODS, load_config, tracking_path
 from gpo.sim.population import render
 from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS
@@ -106,9 +106,7 @@ def main() -> None:
               f"{row['final_error_percent']:7.3f} {target_text:>7} {row['heading_error_deg']:+8.2f}° "
               f"{flagged:>8}  {verdict}")
     if args.write:
-        args.write.parent.mkdir(parents=True, exist_ok=True)
-        args.write.write_text(json.dumps(rows, indent=1) + "\n")
-        print(f"wrote {args.write}")
+        print(f"wrote {write_json(args.write, rows)}")
 
 
 if __name__ == "__main__":

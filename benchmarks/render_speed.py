@@ -186,7 +186,9 @@ def main() -> None:
                     f"{apart * 1e3:>14.1f}  {'within' if within else 'NOT within'} {TOLERANCE_PERCENT} %"
                 )
     if args.write:
-        args.write.write_text(json.dumps(results, indent=1) + "\n")
+        from gpo.outputs import write_json  # here: a worker's gpo is another revision's
+
+        print(f"wrote {write_json(args.write, results)}")
 
 
 if __name__ == "__main__":

@@ -14,12 +14,12 @@ the shipped one at most 0.2 % on I and on II and at most 0.5 % on IX; heading RM
 """
 
 import argparse
-import json
 import math
 from pathlib import Path
 
 import cv2
 
+from gpo.outputs import write_json
 from gpo.sim.table2 import EXPERIMENTS, HEADER, experiment, format_row, reproduce_table2
 
 TARGETS = {("shipped", "I"): 0.2, ("shipped", "II"): 0.2, ("shipped", "IX"): 0.5}  # final error, % of distance
@@ -54,9 +54,7 @@ def main() -> None:
                   f"{'met' if value <= target else 'MISSED'}")
     print(f"the paper: {PAPER}")
     if args.write:
-        args.write.parent.mkdir(parents=True, exist_ok=True)
-        args.write.write_text(json.dumps(rows, indent=1) + "\n")
-        print(f"wrote {args.write}")
+        print(f"wrote {write_json(args.write, rows)}")
 
 
 if __name__ == "__main__":

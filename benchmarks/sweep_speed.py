@@ -18,7 +18,6 @@ speed-up cannot show; measure it on an otherwise idle machine.
 
 import argparse
 import itertools
-import json
 import os
 import tempfile
 import time
@@ -28,6 +27,7 @@ import cv2
 import numpy as np
 
 from gpo.batch import Run, cluster_client, code_version, configured, execute, recording_digest, run_key, sweep
+from gpo.outputs import write_json
 from gpo.pipeline import config_to_dict
 from gpo.sim.record import recording
 
@@ -105,9 +105,7 @@ def main() -> None:
         print(f"differs: run {key}, {column}: {sequential[key][column]!r} one after another, "
               f"{table.at[key, column]!r} in the sweep")
     if args.write:
-        args.write.parent.mkdir(parents=True, exist_ok=True)
-        args.write.write_text(json.dumps(numbers, indent=1) + "\n")
-        print(f"wrote {args.write}")
+        print(f"wrote {write_json(args.write, numbers)}")
 
 
 def _autogroup() -> bool | None:

@@ -31,6 +31,8 @@ import nbformat
 from nbclient import NotebookClient
 from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
 
+from gpo.outputs import write_json
+
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOKS = ROOT / "notebooks"
 TARGET_S = 1.0
@@ -218,9 +220,7 @@ def main() -> None:
     if failed:
         print(f"chapters that failed to run: {', '.join(failed)}")
     if args.write:
-        args.write.parent.mkdir(parents=True, exist_ok=True)
-        args.write.write_text(json.dumps(rows, indent=1) + "\n")
-        print(f"wrote {args.write}")
+        print(f"wrote {write_json(args.write, rows)}")
     if failed:
         sys.exit(1)
 

@@ -8,6 +8,7 @@ a result it flags as bad replace a file already there (``destination``: then it 
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 from collections.abc import Callable, Iterable, Iterator
@@ -97,3 +98,9 @@ def write_with(path, write: Callable[[Path], object]) -> Path:
 def write_text(path, text: str) -> Path:
     """``text`` written to ``path`` through a temporary name; return ``path``."""
     return write_with(path, lambda temporary: temporary.write_text(text))
+
+
+def write_json(path, document) -> Path:
+    """``document`` as indented JSON text (``write_text``), its folder made when missing; return ``path``."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    return write_text(path, json.dumps(document, indent=1) + "\n")
