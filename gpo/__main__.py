@@ -1,6 +1,7 @@
 """The ``python -m gpo`` command line.
 
 python -m gpo demo [--out DIR]    figures, tables and the sample recording's odometry, written to DIR
+python -m gpo mount IMAGE --camera CALIB --board 7x5 --square S [--at X Y YAW] --out mount.yaml   the mount
 python -m gpo run BAG --config RIG.yaml --out traj.tum [--method gpo|gpo-exact|gpo-rigid] [--topic T]
 python -m gpo run BAG ... --write-bag OUT.bag    also a copy of the bag with the estimate as nav_msgs/Odometry
 python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
@@ -30,6 +31,7 @@ from matplotlib.figure import Figure
 from gpo.bag import POSE_TYPES, Recording, copy_with_trajectory, describe
 from gpo.calibrate import MODELS, CalibrationError, main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
+from gpo.measure_mount import mount_command
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 from gpo.outputs import check_output, destination, write_text, write_with
 from gpo.pipeline import (
@@ -396,6 +398,21 @@ def main(argv: list[str] | None = None) -> int:
     calibrate_parser.add_argument("--model", default="eucm", choices=MODELS)
     calibrate_parser.add_argument("--out", type=Path, default=Path("calib.yaml"), help="Kalibr camchain to write")
     calibrate_parser.add_argument("--force", action="store_true", help="a fit flagged as bad replaces --out too")
+    mount_parser = commands.add_parser("mount", help="the camera's mount from an image of a chessboard on the floor")
+    mount_parser.add_argument("image", type=Path, help="the camera's image of a board lying on the floor")
+    mount_parser.add_argument(
+        "--camera", type=Path, required=True, help="its calibration: Kalibr YAML, Basalt JSON or a run config"
+    )
+    mount_parser.add_argument("--board", required=True, help="inner corners per row x per column, e.g. 7x5")
+    mount_parser.add_argument("--square", required=True, type=_positive, help="square size in metres")
+    mount_parser.add_argument(
+        "--at", nargs=3, type=float, metavar=("X", "Y", "YAW"),
+        help="the board's outer corner in base_link (m) and its x axis's yaw (degrees): then x, y, yaw are measured",
+    )
+    mount_parser.add_argument("--kind", default="auto", choices=("auto", "forward", "downward"))
+    mount_parser.add_argument("--out", type=Path, default=Path("mount.yaml"), help="mount YAML to write")
+    mount_parser.add_argument("--picture", type=Path, help="PNG of the board and floor grid (default: beside --out)")
+    mount_parser.add_argument("--force", action="store_true", help="a flagged mount replaces --out too")
     run_parser = commands.add_parser("run", help="odometry of a recording: a TUM trajectory and a summary")
     run_parser.add_argument("bag", type=Path, help="a ROS1 .bag, a ROS2 bag folder, or a .db3/.mcap file")
     run_parser.add_argument("--config", type=Path, help="run config YAML (default: the simulated T265 rig)")
@@ -466,6 +483,8 @@ def _command(args) -> int:
         check_output(args.out, args.images, "--out")
         result = main_calibrate(args.images, args.board, args.square, args.model, args.out, args.force)
         return 0 if result.ok else 1
+    elif args.command == "mount":
+        return mount_command(args)
     elif args.command == "run":
         return run_command(args)
     elif args.command == "evaluate":
