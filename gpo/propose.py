@@ -17,9 +17,9 @@ centre on the floor):
   the robot's own body, below and behind the camera, stays out of it;
 - a camera looking down: a rectangle centred where the optical axis meets the floor, ``DOWN_FILL`` of the way to
   where the floor leaves the image along base_link's x and y;
-- its pixel: the camera's footprint at the region's centre (metres per camera pixel, the geometric mean of both
-  directions), so that the floor image neither throws away the camera's detail nor invents it, and the flow's
-  window spans the same floor it would in the camera image;
+- its pixel: the camera's footprint (metres per camera pixel, the geometric mean of both directions) at the
+  region's near edge for a camera looking ahead, where it is finest, so that the floor image throws away none of
+  the camera's detail; at the centre for a camera looking down, where it hardly changes;
 - every point of it must project inside the image, ``MARGIN_PX`` from its border, through a valid ray.
 
 The kinematic lever (the bicycle's wheelbase and rear-axle-to-reference distance) is the region's centre's
@@ -292,20 +292,14 @@ def floor_region(camera, mount: CameraMount) -> tuple[FloorImage, str]:
         if np.linalg.norm(forward) < 1e-6:
             raise ValueError("the camera looks straight up or down along its body's x axis: no floor ahead of it")
         forward /= np.linalg.norm(forward)
-        scale, centre = 1e-3, foot
-        for _ in range(3):  # the pixel sets the region's size, the size its centre, the centre the pixel
-            side = REGION_PIXELS * scale
-            centre = foot + (BODY_CLEARANCE * height + side / 2.0) * forward
-            scale = footprint(camera, mount, centre)
-            if not np.isfinite(scale):
-                break
-            scale = float(np.round(scale, 4))
-        centre = foot + (BODY_CLEARANCE * height + REGION_PIXELS * scale / 2.0) * forward
+        near = foot + BODY_CLEARANCE * height * forward
+        scale = float(np.round(footprint(camera, mount, near), 4))
+        centre = near + REGION_PIXELS * scale / 2.0 * forward
         half = [REGION_PIXELS * scale / 2.0] * 2
         how = (
             f"the camera looks ahead: {REGION_PIXELS} x {REGION_PIXELS} floor pixels on its line of sight, starting "
             f"{BODY_CLEARANCE} camera heights ({BODY_CLEARANCE * height:.3f} m) ahead of its foot, clear of the robot's"
-            " body; pixel = the camera's footprint at the centre"
+            " body; pixel = the camera's footprint at its near edge, the finest in it"
         )
     if not np.isfinite(scale):
         raise ValueError(_unseen(mount, centre))
