@@ -88,9 +88,12 @@ def measure(
             f"the image is {image.shape[1]} x {image.shape[0]} pixels but the camera calibration is "
             f"{camera.width} x {camera.height}: give the calibration of the camera that took this image"
         )
-    corners = detect_corners(image, camera, board)
-    _check_whole_board(image, camera, board)
-    _check_found_once(image, camera, board, corners)
+    try:  # found in the image itself, the checks look there alone; else in the perspective views too
+        corners, rectify = detect_corners(image, camera, board, rectify=False), False
+    except MountError:
+        corners, rectify = detect_corners(image, camera, board), None
+    _check_whole_board(image, camera, board, rectify)
+    _check_found_once(image, camera, board, corners, rectify)
     estimate = mount_from_corners(corners, camera, board, at, "forward")
     if kind == "auto":
         kind = "downward" if _looks_down(estimate) else "forward"
@@ -111,13 +114,14 @@ def _looks_down(estimate: MountEstimate) -> bool:
     return -up_in_camera[2] > np.cos(np.radians(DOWNWARD_BELOW_DEG))
 
 
-def _check_whole_board(image: np.ndarray, camera: Camera, board: Chessboard) -> None:
+def _check_whole_board(image: np.ndarray, camera: Camera, board: Chessboard, rectify: bool | None) -> None:
     """Raise ``MountError`` when a board of one more row or column of squares is in view: ``board`` is then a part
-    of the board lying there, and its corners would be read in the wrong places."""
+    of the board lying there, and its corners would be read in the wrong places. ``rectify`` as
+    ``gpo.mount.detect_corners``: where the board itself was found."""
     nx, ny = board.squares
     for larger in ((nx + 1, ny), (nx, ny + 1)):
         try:
-            detect_corners(image, camera, Chessboard(larger, board.square, board.margin))
+            detect_corners(image, camera, Chessboard(larger, board.square, board.margin), rectify)
         except MountError:
             continue
         raise MountError(
@@ -126,14 +130,16 @@ def _check_whole_board(image: np.ndarray, camera: Camera, board: Chessboard) -> 
         )
 
 
-def _check_found_once(image: np.ndarray, camera: Camera, board: Chessboard, corners: np.ndarray) -> None:
+def _check_found_once(
+    image: np.ndarray, camera: Camera, board: Chessboard, corners: np.ndarray, rectify: bool | None
+) -> None:
     """Raise ``MountError`` when a second board of the same size is found with the first one painted over."""
     covered = image.copy()
     hull = cv2.convexHull(corners.astype(np.float32)).astype(np.int32)
     grown = cv2.dilate(cv2.fillConvexPoly(np.zeros(image.shape[:2], np.uint8), hull, 1), np.ones((15, 15), np.uint8))
     covered[grown.astype(bool)] = 128
     try:
-        detect_corners(covered, camera, board)
+        detect_corners(covered, camera, board, rectify)
     except MountError:
         return
     nx, ny = board.pattern_size
