@@ -2,7 +2,9 @@
 
 python -m gpo demo [--out DIR]    figures, tables and the sample recording's odometry, written to DIR
 python -m gpo mount IMAGE --camera CALIB --board 7x5 --square S [--at X Y YAW] --out mount.yaml   the mount
+python -m gpo config BAG [--camera CALIB] [--mount mount.yaml] --out rig.yaml   a run config from the bag, commented
 python -m gpo run BAG --config RIG.yaml --out traj.tum [--method gpo|gpo-exact|gpo-rigid] [--topic T]
+python -m gpo run BAG ...   without --config: the config proposed from what the bag holds (as gpo config)
 python -m gpo run BAG ... --write-bag OUT.bag    also a copy of the bag with the estimate as nav_msgs/Odometry
 python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
 python -m gpo table4 [PATH ...]   the first paper's Table 4 (and the second's Table 2 metrics) on long1-3

@@ -41,7 +41,7 @@ from scipy.spatial.transform import Rotation
 
 from gpo.bag import Recording
 from gpo.calibfiles import camera_to_kalibr
-from gpo.config import MountSection, _mount, read_yaml
+from gpo.config import load_mount
 from gpo.ground import FloorImage
 from gpo.kinematics import PaperBicycle
 from gpo.measure_mount import load_camera
@@ -171,7 +171,8 @@ def _camera(recording: Recording, info_topic: str | None, camera_file) -> tuple:
 
 def static_tree(recording: Recording) -> dict[str, tuple[str, np.ndarray, Rotation]]:
     """/tf_static as child -> (parent, translation m, rotation parent <- child), the last one of each child winning;
-    empty when the bag has no /tf_static."""
+    empty when the bag has no /tf_static. (``Recording.static_transform`` reads one named pair; the whole tree is read
+    here through its message reader.)"""
     tree = {}
     if "/tf_static" not in {t.name for t in recording.topics()}:
         return tree
@@ -202,13 +203,7 @@ def chain(tree: dict, parent: str, child: str) -> tuple[Rotation, np.ndarray] | 
 def _mount_of(recording: Recording, frame_id: str, mount_file) -> tuple[CameraMount, str]:
     """The camera's optical frame in base_link: from ``mount_file`` or else the bag's /tf_static, and its source."""
     if mount_file is not None:
-        document = read_yaml(mount_file)
-        if not isinstance(document, dict) or "mount" not in document:
-            raise ValueError(f"{mount_file}: expected a YAML with a mount section, as gpo mount writes it")
-        try:
-            mount = _mount(MountSection.model_validate(document["mount"]), Path(mount_file))
-        except ValueError as error:
-            raise ValueError(f"{mount_file}, mount: {error}") from None
+        mount = load_mount(mount_file)
         return check_mount(mount, str(mount_file)), f"--mount {mount_file}"
     tree = static_tree(recording)
     found = chain(tree, "base_link", frame_id)

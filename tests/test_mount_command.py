@@ -7,11 +7,10 @@ image is the renderer's, the calibration the rig's own camera written as a Kalib
 import cv2
 import numpy as np
 import pytest
-import yaml
 
 from gpo.__main__ import main
 from gpo.calibfiles import save_kalibr
-from gpo.config import MountSection, _mount
+from gpo.config import load_mount
 from gpo.mount import floor_angles
 from gpo.sim.floors import make_floor
 from gpo.sim.record import FLOOR_BOARDS, TEXEL_M, floor_board_image
@@ -37,10 +36,6 @@ def _at(placement: FloorBoard) -> list[str]:
     return ["--at", str(placement.x), str(placement.y), str(np.degrees(placement.yaw))]
 
 
-def _mount_of(path):
-    return _mount(MountSection.model_validate(yaml.safe_load(path.read_text())["mount"]), path)
-
-
 @pytest.mark.parametrize("rig_name", KINDS)
 def test_mount_command_meets_the_targets_on_the_simulated_floor_board(rig_name, tmp_path, capsys):
     rig, placement = RIGS[rig_name](), FLOOR_BOARDS[rig_name]
@@ -49,7 +44,7 @@ def test_mount_command_meets_the_targets_on_the_simulated_floor_board(rig_name, 
     args = ["mount", str(image), "--camera", str(calib), "--board", "7x5", "--square", "0.02", "--out", str(out)]
     assert main([*args, *_at(placement)]) == 0
     printed = capsys.readouterr().out
-    measured = _mount_of(out)
+    measured = load_mount(out)
     assert abs(measured.height - rig.mount.height) < HEIGHT_TOL_M
     kind = KINDS[rig_name]
     angles = [floor_angles(m.rotation.inv().apply([0.0, 0.0, 1.0]), kind) for m in (measured, rig.mount)]
@@ -63,7 +58,7 @@ def test_mount_command_meets_the_targets_on_the_simulated_floor_board(rig_name, 
     bare = tmp_path / "bare.yaml"
     assert main([*args[:-1], str(bare)]) == 0
     assert "x, y, yaw: not measured" in capsys.readouterr().out
-    unplaced = _mount_of(bare)
+    unplaced = load_mount(bare)
     assert abs(unplaced.height - measured.height) < 1e-9 and not unplaced.position[:2].any()
     unplaced_angles = floor_angles(unplaced.rotation.inv().apply([0.0, 0.0, 1.0]), kind)
     np.testing.assert_allclose(unplaced_angles, angles[0], atol=1e-9)
