@@ -18,7 +18,7 @@ from gpo.pipeline import load_config
 from gpo.propose import MARGIN_PX, check_region, floor_region, footprint
 from gpo.rig import CameraMount
 from gpo.sim.realsense import RIGS, realsense_recording
-from gpo.sim.record import START_NS
+from gpo.sim.record import START_NS, recording
 from gpo.sim.rigs import downward_rig, t265_rig
 
 
@@ -49,6 +49,15 @@ def test_config_from_a_realsense_bag_holds_its_lens_mount_topics_and_a_region_it
     assert config.floor.metres_per_pixel == pytest.approx(near_edge, abs=1e-4)
     assert config.model.wheelbase_m == pytest.approx(centre[0])
     assert abs(centre[1] - truth.mount.position[1]) < 0.01
+    # the written file runs as it is
+    assert main(["run", str(bag), "--config", str(out), "--out", str(tmp_path / "traj.tum")]) == 0
+
+
+def test_run_without_a_config_keeps_the_shipped_one_for_its_own_rig(capsys, tmp_path):
+    assert main(["run", str(recording("test")), "--out", str(tmp_path / "traj.tum")]) == 0
+    assert "config: the shipped default (sim_t265.yaml): the bag's camera_info and /tf_static are its rig's" in (
+        capsys.readouterr().out
+    )
 
 
 def test_a_downward_camera_gets_a_region_below_it_read_by_the_rigid_fit():
