@@ -1,7 +1,10 @@
 """The ``python -m gpo`` command line.
 
 python -m gpo demo [--out DIR]    figures, tables and the sample recording's odometry, written to DIR
+python -m gpo mount IMAGE --camera CALIB --board 7x5 --square S [--at X Y YAW] --out mount.yaml   the mount
+python -m gpo config BAG [--camera CALIB] [--mount mount.yaml] --out rig.yaml   a run config from the bag, commented
 python -m gpo run BAG --config RIG.yaml --out traj.tum [--method gpo|gpo-exact|gpo-rigid] [--topic T]
+python -m gpo run BAG ...   without --config: the config proposed from what the bag holds (as gpo config)
 python -m gpo run BAG ... --write-bag OUT.bag    also a copy of the bag with the estimate as nav_msgs/Odometry
 python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
 python -m gpo table4 [PATH ...]   the first paper's Table 4 (and the second's Table 2 metrics) on long1-3
@@ -30,10 +33,10 @@ from matplotlib.figure import Figure
 from gpo.bag import POSE_TYPES, Recording, copy_with_trajectory, describe
 from gpo.calibrate import MODELS, CalibrationError, main_calibrate
 from gpo.camera import EUCM, T265_LIKE, Pinhole
+from gpo.measure_mount import mount_command
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 from gpo.outputs import check_output, destination, write_text, write_with
 from gpo.pipeline import (
-    DEFAULT_CONFIG,
     METHODS,
     VECTORS,
     OdometryResult,
@@ -43,6 +46,7 @@ from gpo.pipeline import (
     tracking_path,
 )
 from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
+from gpo.propose import config_command, config_from_bag
 from gpo.sim.population import render
 from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, preset, recording, simulate, write_sample_data
 from gpo.sim.table4 import PATHS as TABLE4_PATHS
@@ -252,7 +256,10 @@ def check_plot(path: Path, inputs: list[Path]) -> Path:
 
 def run_command(args) -> int:
     """``python -m gpo run``: everything checked, the odometry, then its files (see the module docstring)."""
-    config = load_config(args.config)
+    if args.config is None:
+        config, origin = config_from_bag(args.bag, args.topic)
+    else:
+        config, origin = load_config(args.config), str(args.config)
     changes = {k: v for k, v in (("method", args.method), ("vector", args.vector)) if v}
     config = config.replace(**changes) if changes else config
     inputs = [args.bag, args.config]
@@ -266,7 +273,7 @@ def run_command(args) -> int:
     try:
         result = run(args.bag, config, args.topic)
     except ValueError as error:
-        raise ValueError(f"{error} (config: {args.config or 'the default, ' + DEFAULT_CONFIG})") from None
+        raise ValueError(f"{error} (config: {origin})") from None
     print_run(result)
     out = destination(args.out, result.flagged, args.force)
     if out != args.out:
@@ -396,9 +403,30 @@ def main(argv: list[str] | None = None) -> int:
     calibrate_parser.add_argument("--model", default="eucm", choices=MODELS)
     calibrate_parser.add_argument("--out", type=Path, default=Path("calib.yaml"), help="Kalibr camchain to write")
     calibrate_parser.add_argument("--force", action="store_true", help="a fit flagged as bad replaces --out too")
+    mount_parser = commands.add_parser("mount", help="the camera's mount from an image of a chessboard on the floor")
+    mount_parser.add_argument("image", type=Path, help="the camera's image of a board lying on the floor")
+    mount_parser.add_argument(
+        "--camera", type=Path, required=True, help="its calibration: Kalibr YAML, Basalt JSON or a run config"
+    )
+    mount_parser.add_argument("--board", required=True, help="inner corners per row x per column, e.g. 7x5")
+    mount_parser.add_argument("--square", required=True, type=_positive, help="square size in metres")
+    mount_parser.add_argument(
+        "--at", nargs=3, type=float, metavar=("X", "Y", "YAW"),
+        help="the board's outer corner in base_link (m) and its x axis's yaw (degrees): then x, y, yaw are measured",
+    )
+    mount_parser.add_argument("--kind", default="auto", choices=("auto", "forward", "downward"))
+    mount_parser.add_argument("--out", type=Path, default=Path("mount.yaml"), help="mount YAML to write")
+    mount_parser.add_argument("--picture", type=Path, help="PNG of the board and floor grid (default: beside --out)")
+    mount_parser.add_argument("--force", action="store_true", help="a flagged mount replaces --out too")
+    config_parser = commands.add_parser("config", help="a run config proposed from a bag and what is given")
+    config_parser.add_argument("bag", type=Path, help="a ROS1 .bag, a ROS2 bag folder, or a .db3/.mcap file")
+    config_parser.add_argument("--camera", type=Path, help="calibration in place of the bag's camera_info")
+    config_parser.add_argument("--mount", type=Path, help="a mount YAML (gpo mount) in place of the bag's /tf_static")
+    config_parser.add_argument("--topic", help="image topic (default: the only one, or the first with camera_info)")
+    config_parser.add_argument("--out", type=Path, default=Path("rig.yaml"), help="config YAML to write")
     run_parser = commands.add_parser("run", help="odometry of a recording: a TUM trajectory and a summary")
     run_parser.add_argument("bag", type=Path, help="a ROS1 .bag, a ROS2 bag folder, or a .db3/.mcap file")
-    run_parser.add_argument("--config", type=Path, help="run config YAML (default: the simulated T265 rig)")
+    run_parser.add_argument("--config", type=Path, help="run config YAML (default: from what the bag holds)")
     run_parser.add_argument("--out", type=Path, default=Path("traj.tum"), help="TUM file to write (default traj.tum)")
     run_parser.add_argument("--method", choices=METHODS, help="motion estimator (default: the config's)")
     run_parser.add_argument("--vector", choices=VECTORS, help="motion vector statistic (default: the config's)")
@@ -466,6 +494,10 @@ def _command(args) -> int:
         check_output(args.out, args.images, "--out")
         result = main_calibrate(args.images, args.board, args.square, args.model, args.out, args.force)
         return 0 if result.ok else 1
+    elif args.command == "config":
+        return config_command(args)
+    elif args.command == "mount":
+        return mount_command(args)
     elif args.command == "run":
         return run_command(args)
     elif args.command == "evaluate":

@@ -329,6 +329,19 @@ def _camera(config: ConfigFile, path: Path):
     return cameras[name]
 
 
+def load_mount(path) -> CameraMount:
+    """The mount of the ``mount`` section of the YAML file ``path`` (a run config, or what ``gpo mount`` writes)."""
+    path = Path(path)
+    document = read_yaml(path)
+    if not isinstance(document, dict) or "mount" not in document:
+        raise ValueError(f"{path}: expected a YAML mapping with a mount section, as gpo mount writes it")
+    try:
+        section = MountSection.model_validate(document["mount"])
+    except ValidationError as error:
+        raise ValueError(f"{path}: " + "\n  ".join(_problem(e) for e in error.errors()[:8])) from None
+    return _mount(section, path)
+
+
 def _mount(section: MountSection, path: Path) -> CameraMount:
     """The mount of a config's ``mount`` section: ``position_m`` with ``rpy_deg`` (the body frame) or
     ``quaternion_xyzw`` (the optical frame); with both, they must agree within ``MOUNT_AGREEMENT_DEG``."""

@@ -1,0 +1,90 @@
+"""``python -m gpo mount`` on the simulator's floor boards, against the rigs' true mounts; and its bad input.
+
+The truth is each rig's mount as ``gpo.sim.rigs`` sets it and the board's place as ``FLOOR_BOARDS`` sets it; the
+image is the renderer's, the calibration the rig's own camera written as a Kalibr camchain.
+"""
+
+import cv2
+import numpy as np
+import pytest
+
+from gpo.__main__ import main
+from gpo.calibfiles import save_kalibr
+from gpo.config import load_mount
+from gpo.mount import floor_angles
+from gpo.sim.floors import make_floor
+from gpo.sim.record import FLOOR_BOARDS, TEXEL_M, floor_board_image
+from gpo.sim.render import FloorRenderer
+from gpo.sim.rigs import RIGS
+from gpo.targets import FloorBoard
+
+HEIGHT_TOL_M = 0.5e-3
+ANGLE_TOL_DEG = 0.1
+POSITION_TOL_M = 2e-3
+KINDS = {"t265": "forward", "downward": "downward"}
+
+
+def _files(tmp_path, rig_name: str, image=None):
+    """The rig's floor-board image and calibration, written into ``tmp_path``."""
+    image_path, calib_path = tmp_path / f"{rig_name}.png", tmp_path / f"{rig_name}_calib.yaml"
+    cv2.imwrite(str(image_path), floor_board_image(rig_name) if image is None else image)
+    save_kalibr(calib_path, {"cam0": RIGS[rig_name]().camera})
+    return image_path, calib_path
+
+
+def _at(placement: FloorBoard) -> list[str]:
+    return ["--at", str(placement.x), str(placement.y), str(np.degrees(placement.yaw))]
+
+
+@pytest.mark.parametrize("rig_name", KINDS)
+def test_mount_command_meets_the_targets_on_the_simulated_floor_board(rig_name, tmp_path, capsys):
+    rig, placement = RIGS[rig_name](), FLOOR_BOARDS[rig_name]
+    image, calib = _files(tmp_path, rig_name)
+    out = tmp_path / "mount.yaml"
+    args = ["mount", str(image), "--camera", str(calib), "--board", "7x5", "--square", "0.02", "--out", str(out)]
+    assert main([*args, *_at(placement)]) == 0
+    printed = capsys.readouterr().out
+    measured = load_mount(out)
+    assert abs(measured.height - rig.mount.height) < HEIGHT_TOL_M
+    kind = KINDS[rig_name]
+    angles = [floor_angles(m.rotation.inv().apply([0.0, 0.0, 1.0]), kind) for m in (measured, rig.mount)]
+    np.testing.assert_allclose(np.degrees(angles[0]), np.degrees(angles[1]), atol=ANGLE_TOL_DEG)
+    assert np.degrees((measured.rotation * rig.mount.rotation.inv()).magnitude()) < ANGLE_TOL_DEG
+    assert np.linalg.norm(measured.position - rig.mount.position) < POSITION_TOL_M
+    assert "height  0.2500" in printed if rig_name == "downward" else "height  0.1200" in printed
+    picture = cv2.imread(str(out.with_suffix(".png")))
+    assert picture.shape[:2] == (rig.camera.height, rig.camera.width)
+    # without the board's place: the same height and floor angles, x = y = yaw = 0 assumed and said so
+    bare = tmp_path / "bare.yaml"
+    assert main([*args[:-1], str(bare)]) == 0
+    assert "x, y, yaw: not measured" in capsys.readouterr().out
+    unplaced = load_mount(bare)
+    assert abs(unplaced.height - measured.height) < 1e-9 and not unplaced.position[:2].any()
+    unplaced_angles = floor_angles(unplaced.rotation.inv().apply([0.0, 0.0, 1.0]), kind)
+    np.testing.assert_allclose(unplaced_angles, angles[0], atol=1e-9)
+
+
+def _fails(argv, capsys) -> str:
+    assert main(argv) == 1
+    error = capsys.readouterr().err
+    assert "Traceback" not in error
+    return error
+
+
+def test_wrong_board_size_two_boards_and_another_camera_are_clear_errors(tmp_path, capsys):
+    image, calib = _files(tmp_path, "t265")
+    args = ["mount", str(image), "--camera", str(calib), "--square", "0.02", "--out", str(tmp_path / "m.yaml")]
+    assert "check --board" in _fails([*args, "--board", "9x7"], capsys)
+    assert "more inner corners than 6 x 5" in _fails([*args, "--board", "6x5"], capsys)
+    rig, board = RIGS["t265"](), FLOOR_BOARDS["t265"]
+    second = FloorBoard(board.board, board.x - 0.02, board.y + 0.16, board.yaw)
+    floor = make_floor("raised", (-1.0, 2.0, -1.5, 1.5), TEXEL_M["t265"], 0)
+    two = FloorRenderer(rig, floor).render(np.zeros(3), frame_seed=0, boards=(board, second))
+    (tmp_path / "two").mkdir()
+    twice, _ = _files(tmp_path / "two", "t265", two)
+    assert "two chessboards" in _fails(["mount", str(twice), *args[2:], "--board", "7x5"], capsys)
+    _, other = _files(tmp_path, "downward")
+    assert "is 848 x 800 pixels but the camera calibration is 752 x 480" in _fails(
+        [*args[:3], str(other), *args[4:], "--board", "7x5"], capsys
+    )
+    assert not (tmp_path / "m.yaml").exists()
