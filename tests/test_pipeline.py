@@ -7,12 +7,12 @@ import pytest
 
 from gpo.__main__ import main
 from gpo.bag import BagWriter, Recording
+from gpo.book.runs import board_image_path, route_config
 from gpo.kinematics import compose
 from gpo.metrics import final_error
 from gpo.pipeline import FloorOdometer, load_config, run, save_config, tracking_path
 from gpo.sim.record import FLOOR_BOARDS, GROUND_TRUTH_TOPIC, recording
 from gpo.sim.rigs import t265_rig
-from gpo.sim.table4 import board_image_path, route_config
 from gpo.trajectory import Trajectory
 
 FRAMES = 60  # two seconds of the sample recording: straight ahead at up to 0.5 m/s
