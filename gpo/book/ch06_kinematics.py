@@ -205,3 +205,14 @@ def bicycle_panel(wheelbase_m: float = 0.8, rear_to_reference_m: float = 0.8, ra
 
     sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
     return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+def increments_table(increments: dict) -> str:
+    """Planar increments (label -> (dx, dy, dtheta): metres, metres, radians) one a line, in millimetres and
+    millidegrees."""
+    names = ("dx [mm]", "dy [mm]", "dtheta [mdeg]")
+    lines = [f"{'':20}" + "".join(f"{name:>15}" for name in names)]
+    for label, increment in increments.items():
+        values = 1e3 * np.array([increment[0], increment[1], np.degrees(increment[2])])
+        lines.append(f"{label:20}" + "".join(f"{value:15.4f}" for value in values))
+    return "\n".join(lines)
