@@ -1,5 +1,5 @@
-"""Chapter 07, the EKF of the floor and the tracking camera: paths placed on the truth, their errors along the
-way, the NEES between its bounds, and the filter's panel."""
+"""Chapter 07, the EKF of the floor and the tracking camera: noisy steps along an arc and the filter fed them,
+paths placed on the truth, their errors along the way, the NEES between its bounds, and the filter's panel."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ import numpy as np
 from matplotlib.ticker import FuncFormatter
 
 from gpo.book.panels import slider
-from gpo.fusion import FilterDiverged, FusionSettings, fuse
+from gpo.fusion import FilterDiverged, FusionSettings, OdometryFusion, fuse, increment_covariance
+from gpo.kinematics import arc_increment
 from gpo.metrics import final_error, place_on_truth
 
 
@@ -160,3 +161,31 @@ def fusion_panel(floor, tracking, truth, settings: FusionSettings | None = None,
 
     sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
     return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+def arc_steps(seed: int, sources: dict, speed_mps: float, turn_radps: float, seconds: float) -> list[tuple]:
+    """Each source's steps along a circular arc (base_link at ``speed_mps`` turning at ``turn_radps``) for ``seconds``,
+    with noise seeded by ``seed``: (end time s, source, increment (dx, dy, dtheta), dt s, covariance of (dx, dtheta)),
+    in time order. ``sources``: name -> (rate Hz, (sigma of a step's mean speed m/s, of its mean turn rate rad/s));
+    the noise is drawn on (dx, dtheta) from ``gpo.fusion.increment_covariance``."""
+    rng = np.random.default_rng(seed)
+    steps = []
+    for name, (rate, sigma) in sources.items():
+        covariance = increment_covariance(*sigma, 1 / rate)
+        exact = arc_increment(speed_mps, turn_radps, 1 / rate)
+        noisy = np.tile(exact, (round(seconds * rate), 1))
+        noisy[:, [0, 2]] += rng.multivariate_normal(np.zeros(2), covariance, len(noisy))
+        steps += [((k + 1) / rate, name, noisy[k], 1 / rate, covariance) for k in range(len(noisy))]
+    return sorted(steps, key=lambda step: step[0])
+
+
+def filter_steps(steps: list[tuple], used: tuple[str, ...], noise) -> tuple[OdometryFusion, list[tuple]]:
+    """An ``OdometryFusion`` with process noise ``noise`` fed the ``arc_steps`` of the sources in ``used``, and its
+    (time s, pose (x, y, theta), pose covariance) after each floor step."""
+    fusion, kept = OdometryFusion(0.0, noise, sources=used), []
+    for time_s, name, increment, dt, covariance in steps:
+        if name in used:
+            fusion.add(name, time_s, increment, dt, covariance)
+            if name == "floor":
+                kept.append((time_s, fusion.state[:3], fusion.covariance[:3, :3]))
+    return fusion, kept

@@ -1,10 +1,11 @@
-"""Chapter 08, the second paper's floor feature odometer: keypoints, matches by fate, the histogram filter and
-the invariance check's loops, and the odometer's panel on one frame pair (the chapter's Table 2 is
-``gpo.book.ch08_table2``)."""
+"""Chapter 08, the second paper's floor feature odometer: a recording's frames, keypoints, matches by fate, the
+histogram filter and the invariance check's loops, and the odometer's panel on one frame pair (the chapter's Table 2
+is ``gpo.book.ch08_table2``)."""
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import time
 
 import ipywidgets as widgets
@@ -13,8 +14,28 @@ import numpy as np
 from matplotlib.collections import LineCollection, PatchCollection, PolyCollection
 from matplotlib.patches import Circle
 
+from gpo.bag import Recording
 from gpo.book.panels import int_slider, slider
 from gpo.features import DETECTORS, FeatureParameters, FeatureTracker, detect
+
+
+def frames_of(bag, start: int = 0, stop: int | None = None) -> list[tuple[int, np.ndarray]]:
+    """(stamp ns, grey image) of the camera frames ``start`` .. ``stop`` - 1 of the recording at ``bag``."""
+    with Recording(bag) as recorded:
+        chosen = itertools.islice(recorded.frames(gray=True, progress=False), start, stop)
+        return [(frame.stamp_ns, frame.image) for frame in chosen]
+
+
+def draw_floor_frames(images: dict, frame: int) -> plt.Figure:
+    """One grey camera frame of each floor (name -> image (H, W)) side by side, each titled with its name and the
+    frame's number ``frame``."""
+    fig, axes = plt.subplots(1, len(images), figsize=(5 * len(images), 3.4))
+    for ax, (kind, image) in zip(np.atleast_1d(axes), images.items(), strict=True):
+        ax.imshow(image, cmap="gray", vmin=0, vmax=255)
+        ax.set_title(f"{kind}, frame {frame}")
+        ax.axis("off")
+    fig.tight_layout()
+    return fig
 
 
 def _frame(image, ax=None) -> plt.Axes:

@@ -1,13 +1,31 @@
-"""Chapter 09, evaluation: evaluated paths over the truth, their errors along the distance, and a panel over
-every row of Table 4 (``gpo.book.ch09_table4``) under the alignment chosen."""
+"""Chapter 09, evaluation: evo's own command line beside ``gpo.metrics``, evaluated paths over the truth and their
+errors along the distance, Table 4's rows (``gpo.book.ch09_table4``) compared and drawn, the EKF's knobs tried on
+Table 4's inputs, and a panel over every row under the alignment chosen."""
 
 from __future__ import annotations
+
+import dataclasses
+import os
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ProcessPoolExecutor
+from itertools import pairwise
+from multiprocessing import get_context
+from pathlib import Path
 
 import ipywidgets as widgets
 import matplotlib.pyplot as plt
 import numpy as np
+from evo.tools import file_interface
 
-from gpo.metrics import Alignment, evaluate
+from gpo.bag import Recording
+from gpo.book.ch09_table4 import PATHS
+from gpo.book.runs import floor_run, route_config
+from gpo.fusion import FusionSettings, fuse
+from gpo.metrics import MAX_STAMP_DIFFERENCE_S, Alignment, evaluate, final_error
+from gpo.pipeline import tracking_path
+from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
 
 def draw_evaluated_paths(evaluations: dict, ax=None, styles: dict | None = None) -> plt.Axes:
@@ -119,3 +137,114 @@ def evaluation_panel(table, shown: tuple | None = None) -> widgets.VBox:
         plt.show()
 
     return widgets.VBox([widgets.HBox(list(controls.values())), widgets.interactive_output(redraw, controls)])
+
+
+def evo_ape_statistics(truth_file: Path, estimate_file: Path, flags: list[str]) -> dict[str, float]:
+    """The APE statistics (metres: rmse, mean, median, max, ...) that evo's own command line, ``evo_ape tum``, saves for
+    two TUM files, with its alignment ``flags`` (e.g. ``--align_origin``) and the association of ``gpo.metrics``."""
+    with tempfile.TemporaryDirectory() as folder:
+        saved = Path(folder) / "ape.zip"
+        command = [str(Path(sys.executable).parent / "evo_ape"), "tum", str(truth_file), str(estimate_file), *flags,
+                   "--t_max_diff", str(MAX_STAMP_DIFFERENCE_S), "--save_results", str(saved), "--no_warnings"]
+        subprocess.run(command, check=True, capture_output=True, text=True)
+        return file_interface.load_res_file(saved).stats
+
+
+def fusion_inputs(paths=PATHS, settings: FusionSettings | None = None) -> dict[str, tuple]:
+    """path -> (GPO's floor run on the ortho-GPI, kept on disk (``gpo.book.runs.floor_run``); the tracking camera's
+    path of base_link (``gpo.pipeline.tracking_path`` with ``settings``, default the package's); the truth)."""
+    settings = settings or FusionSettings()
+    inputs = {}
+    for path in paths:
+        bag = recording(path, progress=False)
+        with Recording(bag) as recorded:
+            floor = floor_run(bag, route_config("gpo", "ortho-gpi"))
+            inputs[path] = floor, tracking_path(recorded, settings), recorded.trajectory(GROUND_TRUTH_TOPIC)
+    return inputs
+
+
+def fused_final(floor, tracking, truth, settings: FusionSettings) -> tuple[float, float]:
+    """(final position error, % of the distance; final heading error, degrees) of the EKF of ``floor`` (a
+    ``FloorRun``) and ``tracking`` with ``settings``, against ``truth``."""
+    error = final_error(fuse(floor.trajectory, floor.inliers, tracking, settings, floor.spread_px).trajectory, truth)
+    return error.percent, float(np.degrees(error.heading_rad))
+
+
+class FusionKnobs:
+    """``fused_final`` on every path of ``inputs`` (``fusion_inputs``) for each (floor turn sigma rad/s, angular
+    process noise rad/s^2 per sqrt(Hz)) of ``grid``, the rest of ``settings`` kept: started at once in worker
+    processes (all cores but one), so that the chapter goes on meanwhile; ``finals()`` waits for them."""
+
+    def __init__(self, inputs: dict, settings: FusionSettings, grid):
+        self._pool = ProcessPoolExecutor(max(1, (os.cpu_count() or 1) - 1), mp_context=get_context("fork"))
+        self._pending = {}
+        for turn, noise in grid:
+            chosen = dataclasses.replace(settings, floor_turn_sigma_radps=turn, angular_accel_radps2=noise)
+            for path, (floor, tracking, truth) in inputs.items():
+                self._pending[path, turn, noise] = self._pool.submit(fused_final, floor, tracking, truth, chosen)
+
+    def finals(self) -> dict[tuple, tuple[float, float]]:
+        """(path, turn sigma, angular noise) -> ``fused_final``'s (percent, degrees), once every run is done."""
+        finals = {key: job.result() for key, job in self._pending.items()}
+        self._pool.shutdown()
+        return finals
+
+
+def ordered(table, *chain) -> str:
+    """Whether the rows of ``chain`` (of a ``Table4``) come in increasing order of translation error, on the mean over
+    the paths and on every path: one line."""
+    errors = dict(zip(table.rows, table.translation_errors_m(), strict=True))
+    on_mean = all(errors[a].mean() < errors[b].mean() for a, b in pairwise(chain))
+    on_paths = all(np.all(errors[a] < errors[b]) for a, b in pairwise(chain))
+    return f"mean: {on_mean!s:<5}  every path: {on_paths}"
+
+
+ROW_COLOURS = {  # (source, method) of a row of Table 4 -> its colour
+    ("camera", None): "tab:orange",
+    ("floor", "gpo"): "tab:red",
+    ("fused", "gpo"): "tab:purple",
+    ("floor", "gpo-exact"): "tab:blue",
+    ("fused", "gpo-exact"): "tab:cyan",
+    ("floor", "gpo-rigid"): "tab:green",
+    ("fused", "gpo-rigid"): "tab:olive",
+    ("floor", "features"): "tab:brown",
+}
+ROUTE_LINES = {None: "-", "ortho-gpi": "-", "gpi": "--", "analytic": ":"}  # a row's route -> its line style
+
+
+def row_styles(rows) -> dict[str, dict]:
+    """Each row's label -> its line's style: colour by source and method, dashes by route, the EKF's lines thicker."""
+    return {
+        row.label: {
+            "color": ROW_COLOURS[row.source, row.method],
+            "ls": ROUTE_LINES[row.route],
+            "lw": 2.2 if row.source == "fused" else 1.2,
+        }
+        for row in rows
+    }
+
+
+def draw_table4_paths(table, styles: dict, end_m: float = 0.45) -> plt.Figure:
+    """Every row of a ``Table4`` on each of its paths (one row of panels a path): the paths over the truth, the last
+    ``end_m`` metres around the truth's end, and the position error along the way; one legend below."""
+    fig, axes = plt.subplots(len(table.paths), 3, figsize=(17, 5 * len(table.paths)),
+                             gridspec_kw={"width_ratios": [1.1, 1, 1.4]}, squeeze=False)
+    camera = next(row for row in table.rows if row.source == "camera")
+    for (whole, end, along), path in zip(axes, table.paths, strict=True):
+        shown = {row.label: table.evaluations[row][path] for row in table.rows}
+        draw_evaluated_paths(shown, ax=whole, styles=styles)
+        whole.set_title(f"{path}: {table.evaluations[camera][path].final.distance_m:.1f} m")
+        draw_evaluated_paths(shown, ax=end, styles=styles)
+        finish = table.evaluations[camera][path].truth.positions[-1, :2]
+        end.set_aspect("equal", adjustable="box")
+        end.set_xlim(finish[0] - end_m, finish[0] + end_m)
+        end.set_ylim(finish[1] - end_m, finish[1] + end_m)
+        end.set_title(f"{path}: the last {end_m:g} m around the truth's end")
+        draw_evaluation_errors(shown, ax=along, styles=styles)
+        along.set_title(f"{path}: position error along the way")
+        for ax in (whole, end, along):
+            ax.get_legend().remove()
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize="small")
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
+    return fig
