@@ -290,7 +290,9 @@ def floor_runs(base: OdometryConfig | None = None) -> dict[str, FloorRun]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description="Compute and keep the runs of the second paper's Table 2.")
+    parser = argparse.ArgumentParser(
+        prog="python -m gpo.book.ch08_table2", description="Compute and keep the runs of the second paper's Table 2."
+    )
     parser.add_argument("experiments", nargs="*", default=[e.number for e in EXPERIMENTS], help="I, II, IV ... IX")
     args = parser.parse_args()
     floor_runs()  # chapter 08's runs over the three floors
