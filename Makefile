@@ -39,7 +39,7 @@ recordings: $(STAMP)
 # cache, the two tables side by side on the two cores (experiment IX, 80 m, is left to benchmarks/second_paper.py)
 tables: recordings
 	$(PHASE) tables sh -c '$(BIN)/python -m gpo table4 > /dev/null & table4=$$!; \
-		$(BIN)/python -m gpo.sim.table2 I II IV V VI VII VIII > /dev/null; table2=$$?; \
+		$(BIN)/python -m gpo.book.ch08_table2 I II IV V VI VII VIII > /dev/null; table2=$$?; \
 		wait $$table4 && exit $$table2'
 
 # two workers (pytest-xdist), each test file on one of them: a notebook's cells share one kernel

@@ -6,7 +6,7 @@
 Each chapter (default: every notebooks/*.ipynb; ``--chapters`` takes names or their leading part, e.g. ``07`` or
 ``01``) is executed with nbclient in a python3 kernel working in notebooks/, as CI runs it; the files on disk stay
 as they are. One extra cell, appended to the notebook in memory, looks in IPython's output cache ``Out`` for the
-panels the chapter showed (the ``VBox`` a ``gpo.widgets`` panel returns as a cell's result) and times one update of
+panels the chapter showed (the ``VBox`` a ``gpo.book`` panel returns as a cell's result) and times one update of
 each: its first slider (else its first dropdown or toggle buttons) set to a neighbouring allowed value (one step up,
 or down at the top of the range; the next option of a choice). The change runs the panel's redraw in the kernel
 (``ipywidgets.interactive_output``), the inline backend's PNG of the figure included; the best of three changes,

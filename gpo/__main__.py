@@ -26,9 +26,9 @@ import signal
 import sys
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from gpo.bag import POSE_TYPES, Recording, copy_with_trajectory, describe
 from gpo.calibrate import MODELS, CalibrationError, main_calibrate
@@ -45,13 +45,11 @@ from gpo.pipeline import (
     summary_path_of,
     tracking_path,
 )
-from gpo.plots import draw_paths, draw_projection_curves, draw_room_in_image, field_of_view_text
 from gpo.propose import config_command, config_from_bag
-from gpo.sim.population import render
-from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, preset, recording, simulate, write_sample_data
-from gpo.sim.table4 import PATHS as TABLE4_PATHS
-from gpo.sim.table4 import reproduce_table4
 from gpo.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 EXIT_CODES = """exit codes:
   0    done
@@ -64,6 +62,8 @@ INTERRUPTED = 130
 def recordings(names: list[str], jobs: int = 1) -> list[Path]:
     """The bags of presets ``names`` (``gpo.sim.record.recording``); with ``jobs`` > 1 those not yet cached are rendered
     that many at a time in processes of their own, without frame progress bars, each printed when done."""
+    from gpo.sim.record import recording
+
     if jobs < 1:
         raise ValueError(f"--jobs must be at least 1, not {jobs}")
     if jobs == 1:
@@ -77,6 +77,10 @@ def recordings(names: list[str], jobs: int = 1) -> list[Path]:
 
 def demo(out: Path) -> list[Path]:
     """Write the camera-model figures and a field-of-view table into ``out``; return the files."""
+    from matplotlib.figure import Figure
+
+    from gpo.book.ch01_eucm_model import draw_projection_curves, draw_room_in_image, field_of_view_text
+
     out.mkdir(parents=True, exist_ok=True)
     written = []
 
@@ -109,6 +113,11 @@ def demo(out: Path) -> list[Path]:
 
 def sample_recording_figures(out: Path) -> list[Path]:
     """Frames and paths of the sample recording (rendered on first use): PNG figures and TUM files in ``out``."""
+    from matplotlib.figure import Figure
+
+    from gpo.book.figures import draw_paths
+    from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+
     with Recording(recording("sample")) as bag:
         topic = bag.image_topic()
         start = bag.start_ns
@@ -138,6 +147,8 @@ def sample_recording_figures(out: Path) -> list[Path]:
 def sample_odometry(out: Path) -> list[Path]:
     """The sample recording's odometry, ``gpo-exact`` alone and fused with the tracking camera by the EKF (the last
     files: ``sample_fused.evaluation.txt``, its evaluation table): trajectories, summaries, plots against truth."""
+    from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+
     bag = recording("sample")
     with Recording(bag) as recorded:
         truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
@@ -228,6 +239,10 @@ def read_tum(path: Path) -> Trajectory:
 def save_evaluation_plot(evaluation: Evaluation, out: Path) -> Path:
     """A figure of both paths (the estimate aligned) and the position error along the truth's distance, written to
     a temporary name and renamed to ``out`` (its suffix names the format)."""
+    from matplotlib.figure import Figure
+
+    from gpo.book.figures import draw_paths
+
     fig = Figure(figsize=(12, 4.8))
     paths, errors = fig.subplots(1, 2, width_ratios=(1.2, 1))
     draw_paths(
@@ -247,6 +262,8 @@ def _save(fig: Figure, path: Path, dpi: int) -> Path:
 
 def check_plot(path: Path, inputs: list[Path]) -> Path:
     """``--plot`` checked before the evaluation: a writable file (``check_output``) of a format matplotlib writes."""
+    from matplotlib.figure import Figure
+
     check_output(path, inputs, "--plot")
     formats = Figure().canvas.get_supported_filetypes()
     if path.suffix.lstrip(".").lower() not in formats:
@@ -334,6 +351,8 @@ def add_sweep_commands(commands) -> None:
 def sweep_command(args) -> int:
     """``python -m gpo sweep``: the spec's presets rendered on the cluster (cached), then every run; the summary."""
     from gpo.batch import cluster_client, load_spec, summary_text, sweep
+    from gpo.sim.population import render
+    from gpo.sim.record import preset
 
     spec = load_spec(args.spec)
     load_config(spec.config)  # a base config that cannot be read stops the sweep before it starts
@@ -356,8 +375,10 @@ def sweep_command(args) -> int:
 def sweep_report(results: Path, out: Path | None = None) -> list[Path]:
     """PNG figures of the sweep in ``results``: the final error against each parameter (per recording and the median
     of all), or per recording when nothing was varied."""
+    from matplotlib.figure import Figure
+
     from gpo.batch import parameter_columns, read_table
-    from gpo.plots import draw_sweep
+    from gpo.book.figures import draw_sweep
 
     table = read_table(results)
     out = out or results / "report"
@@ -373,6 +394,8 @@ def sweep_report(results: Path, out: Path | None = None) -> list[Path]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from gpo.sim.record import PRESETS  # the simulator, matplotlib and the book are imported by the commands using them
+
     parser = argparse.ArgumentParser(
         prog="python -m gpo",
         description=__doc__.splitlines()[0],
@@ -482,6 +505,8 @@ def _command(args) -> int:
         if (args.format == "ros1") != (args.out.suffix == ".bag"):
             raise ValueError(f"--out {args.out}: a ros1 bag is one file named *.bag, a ros2 bag a folder not so")
         check_output(args.out)
+        from gpo.sim.record import PRESETS, simulate
+
         print(f"{args.preset}: {PRESETS[args.preset].description}")
         write_with(args.out, lambda temporary: simulate(args.preset, temporary, args.format))
         print(f"wrote {args.out}")
@@ -512,9 +537,13 @@ def _command(args) -> int:
         if args.plot:
             print(f"wrote {save_evaluation_plot(evaluation, args.plot)}")
     elif args.command == "table4":
-        table = reproduce_table4(tuple(args.paths or TABLE4_PATHS))
+        from gpo.book.ch09_table4 import PATHS, reproduce_table4
+
+        table = reproduce_table4(tuple(args.paths or PATHS))
         print(table.format(), table.format_table2(), sep="\n\n")
     elif args.command == "sample-data":
+        from gpo.sim.record import write_sample_data
+
         for path in write_sample_data(args.out):
             print(f"wrote {path}")
     elif args.command == "sweep":

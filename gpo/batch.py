@@ -70,7 +70,7 @@ RESULTS = ("results.parquet", "results.csv")
 FINISHED = ("ok", "partial")  # statuses a sweep started again does not repeat
 TABLE_EVERY_S = 10.0  # while a sweep runs its table is rewritten at most this often (each run's row.json at once)
 CONNECT_TIMEOUT_S = 20  # the longest wait for a scheduler given by its address
-PRESENTATION_MODULES = ("__main__.py", "plots.py", "widgets.py")  # not part of the code version
+PRESENTATION_MODULES = ("__main__.py",)  # not part of the code version
 
 
 # ----------------------------------------------------------------------------------------------- runs
@@ -137,7 +137,7 @@ def _same(read, wanted) -> bool:
 
 
 def code_version() -> str:
-    """A hash of the sources of the method layer (``gpo/*.py`` but the command line and the figures): what a run's
+    """A hash of the sources of the method layer (``gpo/*.py`` but the command line): what a run's
     numbers depend on besides its recording and config."""
     digest = hashlib.sha256()
     for source in sorted(Path(__file__).parent.glob("*.py")):

@@ -224,9 +224,33 @@ def final_error(
 ) -> FinalError:
     """``FinalError`` of ``estimate`` against ``truth``: associated by time, the estimate's first pose placed on the
     truth's. Raises ValueError as ``associate`` does (fewer than two poses matching in time, among others)."""
+    return _final(*_placed_on_truth(estimate, truth, max_difference_s))
+
+
+def _placed_on_truth(
+    estimate: Trajectory | PoseTrajectory3D, truth: Trajectory | PoseTrajectory3D, max_difference_s: float
+) -> tuple[PoseTrajectory3D, PoseTrajectory3D]:
     estimated, reference = associate(estimate, truth, max_difference_s)
-    estimated.align_origin(reference)
-    return _final(estimated, reference)
+    apply_alignment(estimated, reference, Alignment.ORIGIN)
+    return estimated, reference
+
+
+def place_on_truth(
+    estimate: Trajectory | PoseTrajectory3D,
+    truth: Trajectory | PoseTrajectory3D,
+    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
+) -> tuple[Trajectory, Trajectory]:
+    """(estimate, truth) associated by time, the estimate's first pose placed on the truth's: the papers' alignment
+    (``Alignment.ORIGIN``), the one ``final_error`` and ``evaluate`` use. Raises ValueError as ``associate`` does."""
+    estimated, reference = _placed_on_truth(estimate, truth, max_difference_s)
+    return from_evo(estimated), from_evo(reference)
+
+
+def truth_poses(truth: Trajectory, times) -> np.ndarray:
+    """(N, 3) planar poses (x, y, unwrapped yaw) of ``truth`` at ``times`` (seconds), linearly interpolated between
+    its poses (held at its ends)."""
+    yaw = np.unwrap(truth.yaw)
+    return np.column_stack([np.interp(times, truth.times, values) for values in (*truth.positions[:, :2].T, yaw)])
 
 
 def translation_error(

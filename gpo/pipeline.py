@@ -433,6 +433,18 @@ class FloorOdometer:
         return FrameRecord(int(stamp_ns), tuple(float(v) for v in self.pose), *counts, status, flag)
 
 
+@dataclass(frozen=True)
+class FloorRun:
+    """A floor run's path of base_link in odom (``trajectory``) at every frame not skipped, the flow's inlier tracks
+    behind each of its steps (``inliers``: 0 where the step was coasted, held or first), the run's frames per second,
+    and the inliers' spread behind each step (``spread_px``, pixels: NaN where unknown; None when not kept)."""
+
+    trajectory: Trajectory
+    inliers: np.ndarray
+    frames_per_second: float
+    spread_px: np.ndarray | None = None
+
+
 @dataclass
 class OdometryResult:
     """A run's frames and timing: ``records`` (one per frame read), ``seconds`` of wall time, the ``config``,
@@ -470,6 +482,14 @@ class OdometryResult:
     @property
     def frames_per_second(self) -> float:
         return len(self.records) / self.seconds if self.seconds > 0 else math.nan
+
+    @property
+    def floor_run(self) -> FloorRun:
+        """The floor odometry as the EKF reads it (``gpo.fusion.fuse``): its path, each step's inliers and spread."""
+        kept = [r for r in self.records if r.status != "skipped"]
+        inliers = np.array([r.inliers if r.status == "measured" else 0 for r in kept])
+        spread = np.array([r.spread_px for r in kept])
+        return FloorRun(self.floor_trajectory, inliers, self.frames_per_second, spread)
 
     def summary(self) -> dict:
         """Plain numbers for people and files: distance, frames by status, flags by reason, speed."""
@@ -545,13 +565,11 @@ def _fuse_into(result: OdometryResult, tracking: Trajectory, settings: FusionSet
     """Add the EKF's path from the floor odometry of ``result`` and the tracking camera's path of base_link
     (``tracking_path``) to ``result``; when the tracking stream cannot be fused, say why in ``result.error`` and
     leave the floor odometry as the result."""
-    kept = [r for r in result.records if r.status != "skipped"]
-    inliers = np.array([r.inliers if r.status == "measured" else 0 for r in kept])
-    spread = np.array([r.spread_px for r in kept])
+    floor = result.floor_run
     mount = "config (fusion.tracking_mount)" if note == "config" else "/tf_static"
     result.fusion = {"mount": mount, **({"note": note} if note not in (None, "config") else {})}
     try:
-        fused = fuse(result.floor_trajectory, inliers, tracking, settings, spread)
+        fused = fuse(floor.trajectory, floor.inliers, tracking, settings, floor.spread_px)
     except (ValueError, FilterDiverged) as failure:
         reason = f"fusion failed, the floor odometry is the result: {failure}"
         result.error = reason if result.error is None else f"{result.error}; {reason}"

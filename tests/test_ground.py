@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 from scipy.ndimage import map_coordinates
 
 import gpo.ground
+from gpo.book.ch04_table1 import reproduce_table1
 from gpo.ground import (
     DEFAULT_FLOOR_IMAGE,
     FloorImage,
@@ -38,7 +39,6 @@ from gpo.sim.floors import make_floor
 from gpo.sim.record import FLOOR_BOARDS, TEXEL_M, floor_board_image
 from gpo.sim.render import FloorRenderer, camera_pose_in_world
 from gpo.sim.rigs import downward_rig, t265_rig
-from gpo.sim.table1 import reproduce_table1
 
 RIG = t265_rig()
 BOARD = FLOOR_BOARDS["t265"]

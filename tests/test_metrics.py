@@ -17,9 +17,11 @@ from gpo.metrics import (
     associate,
     evaluate,
     final_error,
+    place_on_truth,
     table2_metrics,
     to_evo,
     translation_error,
+    truth_poses,
 )
 from gpo.trajectory import Trajectory
 
@@ -50,6 +52,28 @@ def test_final_error_places_the_first_pose_then_compares_the_last():
     assert error.percent == pytest.approx(2.0, abs=1e-7)
     assert np.degrees(error.heading_rad) == pytest.approx(1.0, abs=1e-9)
     assert error.poses == 101
+
+
+def test_placing_on_the_truth_undoes_a_rigid_move_and_keeps_the_shared_stamps():
+    truth = _arc()
+    moved = _moved(truth, 37.0, [2.0, -1.0, 0.0])
+    shorter = Trajectory(moved.stamps_ns[50:], moved.positions[50:], moved.quaternions[50:], "odom")
+    placed, associated = place_on_truth(shorter, truth)
+    np.testing.assert_array_equal(placed.stamps_ns, truth.stamps_ns[50:])
+    np.testing.assert_array_equal(associated.stamps_ns, truth.stamps_ns[50:])
+    np.testing.assert_allclose(placed.positions, truth.positions[50:], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.angle(np.exp(1j * (placed.yaw - truth.yaw[50:]))), 0.0, atol=1e-9)
+    last = np.hypot(*(placed.positions[-1, :2] - associated.positions[-1, :2]))
+    assert last == pytest.approx(final_error(shorter, truth).position_m, abs=1e-12)  # the same placing
+
+
+def test_truth_poses_interpolate_between_poses_and_hold_at_the_ends():
+    truth = _arc()  # 10 Hz: 0.15 rad/s of heading, the position on a circle
+    poses = truth_poses(truth, [0.05, 10.0, -1.0, 25.0])
+    np.testing.assert_allclose(poses[0], [*truth.positions[:2, :2].mean(axis=0), 0.0075], atol=1e-12)
+    np.testing.assert_allclose(poses[1], [*truth.positions[100, :2], 1.5], atol=1e-12)
+    np.testing.assert_allclose(poses[2], [0.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(poses[3], [*truth.positions[-1, :2], 3.0], atol=1e-12)
 
 
 def test_final_error_refuses_trajectories_apart_in_time():

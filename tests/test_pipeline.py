@@ -7,12 +7,12 @@ import pytest
 
 from gpo.__main__ import main
 from gpo.bag import BagWriter, Recording
+from gpo.book.runs import board_image_path, route_config
 from gpo.kinematics import compose
 from gpo.metrics import final_error
-from gpo.pipeline import FloorOdometer, load_config, run, save_config, tracking_path
+from gpo.pipeline import FloorOdometer, FrameRecord, OdometryResult, load_config, run, save_config, tracking_path
 from gpo.sim.record import FLOOR_BOARDS, GROUND_TRUTH_TOPIC, recording
 from gpo.sim.rigs import t265_rig
-from gpo.sim.table4 import board_image_path, route_config
 from gpo.trajectory import Trajectory
 
 FRAMES = 60  # two seconds of the sample recording: straight ahead at up to 0.5 m/s
@@ -204,3 +204,21 @@ def test_fused_runs_the_floor_odometry_and_the_tracking_camera_through_the_ekf(s
     bag = _write(tmp_path / "no-odometry.bag", frames[:5], [f.stamp_ns for f in frames[:5]])
     with pytest.raises(ValueError, match="/camera/odom/sample"):
         run(bag, config.replace(method="fused"), progress=False)
+
+
+def test_a_runs_floor_run_is_what_the_filter_reads_of_its_frames():
+    """``OdometryResult.floor_run``: the frames not skipped, each step's inliers (0 where not measured) and spread."""
+    nan = float("nan")
+    records = [
+        FrameRecord(0, (0.0, 0.0, 0.0), 0, 0, 0, nan, "first"),
+        FrameRecord(100_000_000, (0.01, 0.0, 0.0), 50, 40, 30, 0.5, "measured"),
+        FrameRecord(200_000_000, (0.01, 0.0, 0.0), 0, 0, 0, nan, "skipped", "unreadable"),
+        FrameRecord(300_000_000, (0.02, 0.0, 0.001), 45, 20, 12, 1.25, "coasted", "too few tracks"),
+        FrameRecord(400_000_000, (0.03, 0.001, 0.002), 60, 50, 44, 0.25, "measured"),
+    ]
+    floor = OdometryResult(records, 2.5, load_config(), "a.bag", "/camera").floor_run
+    np.testing.assert_array_equal(floor.trajectory.stamps_ns, [0, 100_000_000, 300_000_000, 400_000_000])
+    np.testing.assert_allclose(floor.trajectory.positions[:, :2], [[0, 0], [0.01, 0], [0.02, 0], [0.03, 0.001]])
+    assert floor.inliers.tolist() == [0, 30, 0, 44]
+    np.testing.assert_array_equal(floor.spread_px, [nan, 0.5, 1.25, 0.25])
+    assert floor.frames_per_second == 2.0  # five frames read in 2.5 s

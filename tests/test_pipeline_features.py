@@ -87,14 +87,14 @@ def test_features_config_round_trip_and_its_rules(tmp_path):
         load_config(tmp_path / "bad.yaml")
 
 
-# ------------------------------------------------------------------ the second paper's experiments (gpo.sim.table2)
+# ----------------------------------------------------------- the second paper's experiments (gpo.book.ch08_table2)
 
 
 def test_a_stepped_experiment_sees_one_frame_in_the_middle_of_each_rest():
     """IV: 50 steps of 10 mm; the paper's camera took an image at each rest, and so does the odometer here."""
+    from gpo.book.ch08_table2 import experiment, rest_stamps_ns
     from gpo.sim.motion import named_plan
     from gpo.sim.record import START_NS
-    from gpo.sim.table2 import experiment, rest_stamps_ns
 
     chosen = experiment("IV")
     rests = rest_stamps_ns(chosen)
@@ -107,7 +107,7 @@ def test_a_stepped_experiment_sees_one_frame_in_the_middle_of_each_rest():
 
 def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
     """Against the stage's truth at each rest, under the paper's definitions: the paper's IV ends 0.35 mm off."""
-    from gpo.sim.table2 import experiment, table2_row
+    from gpo.book.ch08_table2 import experiment, table2_row
 
     row = table2_row(experiment("IV"), load_config(CONFIG), cache=False)
     assert row.frames == 51
@@ -118,7 +118,7 @@ def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
 
 
 def test_unknown_experiments_are_named():
-    from gpo.sim.table2 import experiment
+    from gpo.book.ch08_table2 import experiment
 
     with pytest.raises(ValueError, match="the experiments are I, II, IV"):
         experiment("III")

@@ -1,10 +1,10 @@
-"""The first paper's Table 1 under its definitions (``gpo.sim.table1.paper_table1``)."""
+"""The first paper's Table 1 under its definitions (``gpo.book.ch04_table1.paper_table1``)."""
 
 import numpy as np
 import pytest
 
+from gpo.book.ch04_table1 import CALIBRATION_ERRORS, PAPER_TABLE1, format_paper_table1, miscalibrated, paper_table1
 from gpo.camera import T265_LIKE
-from gpo.sim.table1 import CALIBRATION_ERRORS, PAPER_TABLE1, format_paper_table1, miscalibrated, paper_table1
 
 
 def test_the_papers_truth_is_its_measured_squares():

@@ -1,6 +1,7 @@
-"""gpo.sim.table4 against numbers computed here: the table's final errors are those of the tracking camera, a fresh
-floor run and its EKF (and, for the floor run, those of a hand-made association and first-pose placement); its text
-names every row and path; a kept floor run is what a fresh run computes; and each config is kept in its own file.
+"""gpo.book.ch09_table4 against numbers computed here: the table's final errors are those of the tracking camera, a
+fresh floor run and its EKF (and, for the floor run, those of a hand-made association and first-pose placement); its
+text names every row and path; a kept floor run (gpo.book.runs) is what a fresh run computes; and each config is kept
+in its own file.
 On the sample recording, so that it runs in seconds."""
 
 import numpy as np
@@ -8,12 +9,13 @@ import pytest
 
 from gpo import cache
 from gpo.bag import Recording
+from gpo.book import runs
+from gpo.book.ch09_table4 import ROWS, Row, format_fusion_accuracy, reproduce_table4
+from gpo.book.runs import floor_run, route_config
 from gpo.fusion import fuse
 from gpo.metrics import MAX_STAMP_DIFFERENCE_S, final_error
 from gpo.pipeline import load_config, tracking_path
-from gpo.sim import table4
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
-from gpo.sim.table4 import ROWS, Row, floor_run, reproduce_table4, route_config
 
 CAMERA, FLOOR, FUSED = Row("camera"), Row("floor", "gpo-exact", "analytic"), Row("fused", "gpo-exact", "analytic")
 
@@ -108,7 +110,7 @@ def test_a_kept_floor_run_is_what_a_fresh_run_computes(sample, empty_cache, monk
     def no_run(*args, **kwargs):
         raise AssertionError("the kept run should have been read back, not computed")
 
-    monkeypatch.setattr(table4, "run", no_run)
+    monkeypatch.setattr(runs, "run", no_run)
     read = floor_run(bag, config)
     for kept in (written, read):
         np.testing.assert_array_equal(kept.trajectory.stamps_ns, fresh.trajectory.stamps_ns)
@@ -140,7 +142,7 @@ def test_a_drifted_tracking_camera_is_the_bags_own_for_the_bags_drift(sample):
     from gpo.sim.record import PRESETS
 
     _, _, tracking = sample
-    again = table4.drifted_tracking("sample", T265_DRIFT, PRESETS["sample"].seed)
+    again = runs.drifted_tracking("sample", T265_DRIFT, PRESETS["sample"].seed)
     np.testing.assert_array_equal(again.stamps_ns, tracking.stamps_ns)
     np.testing.assert_allclose(again.positions, tracking.positions, rtol=0, atol=1e-9)
 
@@ -154,11 +156,11 @@ def test_the_fusion_accuracy_text_gives_each_presets_median_and_worst_and_the_ou
         )
     ]
     summary = {"runs_within": "3/3", "worst_ratio": 1.25, "worst_excess_percent": 0.01}
-    text = table4.format_fusion_accuracy({"runs": runs, "summary": summary})
+    text = format_fusion_accuracy({"runs": runs, "summary": summary})
     lines = text.splitlines()
     assert lines[1].split() == ["long1", "3", "0.04", "2.00", "0.040", "0.050"]
     assert lines[2].split() == ["long1-outages", "2", "16.00", "1.50", "0.250", "0.400"]
     assert "in 3/3 runs (worst 1.250 x" in text
     assert lines[-1] == "with floor outages, fused at most 0.400 % (target 0.3 %: met in 1 of 2 runs)"
-    outages_only = table4.format_fusion_accuracy({"runs": runs, "summary": summary}, outages_only=True)
+    outages_only = format_fusion_accuracy({"runs": runs, "summary": summary}, outages_only=True)
     assert "long1 " not in outages_only and "1.1 x" not in outages_only

@@ -7,10 +7,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
+from gpo.book.ch09_evaluation import evaluation_panel
+from gpo.book.ch09_table4 import Row, Table4
 from gpo.metrics import evaluate
-from gpo.sim.table4 import Row, Table4
 from gpo.trajectory import Trajectory
-from gpo.widgets import evaluation_panel
 
 ROWS = (Row("camera"), Row("floor", "gpo", "ortho-gpi"), Row("fused", "gpo", "ortho-gpi"), Row("floor", "gpo", "gpi"))
 PATHS = ("arc", "line")

@@ -11,10 +11,15 @@ from matplotlib.collections import LineCollection, PatchCollection, PolyCollecti
 from matplotlib.colors import to_rgba
 from matplotlib.patches import StepPatch
 
-import gpo.widgets
+import gpo.book.ch08_floor_features
+from gpo.book.ch08_floor_features import (
+    draw_feature_matches,
+    draw_invariance_loops,
+    draw_keypoints,
+    draw_match_histogram,
+    feature_panel,
+)
 from gpo.features import FeatureParameters, FeatureTracker, detect, histogram_filter
-from gpo.plots import draw_feature_matches, draw_invariance_loops, draw_keypoints, draw_match_histogram
-from gpo.widgets import feature_panel
 
 SIZE = (320, 240)  # width, height
 NOISY = {"detector": "orb", "ratio": 1.0, "invariance_threshold": 0.95}  # wrong matches for both filters to reject
@@ -247,7 +252,7 @@ def test_panel_detects_once_per_detector(frames, monkeypatch):
         detected.append(parameters.detector)
         return detect(image, parameters, mask)
 
-    monkeypatch.setattr(gpo.widgets, "detect", counting)
+    monkeypatch.setattr(gpo.book.ch08_floor_features, "detect", counting)
     controls = _controls(feature_panel(*frames))
     assert detected == ["sift", "sift"]
     for name, value in (("t", 0.7), ("C", 5), ("orientation bins", 90), ("length bins", 40), ("ratio test", 0.9)):
@@ -260,7 +265,7 @@ def test_panel_detects_once_per_detector(frames, monkeypatch):
 
 
 def test_the_histogram_decisions_are_drawn_by_band_and_scaled(frames):
-    from gpo.plots import draw_histogram_decisions
+    from gpo.book.ch08_floor_features import draw_histogram_decisions
 
     matches = _matches(frames, **NOISY)
     orientation, length = matches.histogram

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from matplotlib.quiver import Quiver
 
+from gpo.book.ch05_klt_flow import klt_flow_panel
+from gpo.book.ch06_kinematics import bicycle_panel, constant_steering_paths
 from gpo.kinematics import exact_velocities
-from gpo.widgets import bicycle_panel, constant_steering_paths, klt_flow_panel
 
 
 @pytest.fixture(autouse=True)

@@ -6,12 +6,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
+from gpo.book.ch07_ekf_fusion import FUSION_SLIDERS, fusion_panel
 from gpo.fusion import FusionSettings, fuse
 from gpo.kinematics import arc_increment, integrate
 from gpo.metrics import final_error
-from gpo.sim.table4 import FloorRun
+from gpo.pipeline import FloorRun
 from gpo.trajectory import Trajectory
-from gpo.widgets import FUSION_SLIDERS, fusion_panel
 
 V, OMEGA, SECONDS = 0.3, 0.4, 2.0
 

@@ -9,45 +9,26 @@ their mean. The first paper's number is its "translation error": the final posit
 pose on the truth (``gpo.metrics.translation_error``); its abstract's headline (0.058 m) is the *mean* localization
 error over each test, averaged (``Table4.format_mean``).
 
-Both chessboard routes are calibrated on one frame of ``FLOOR_BOARDS["t265"]`` (``board_image_path``), as chapter 04
-does. A floor run (``floor_run``) takes a few seconds a path; each is kept in the cache's ``runs`` folder
-(``gpo.cache``), keyed by the recording, the whole config and the source of every module a run goes through, so that
-``python -m gpo table4`` computes them once and chapter 09 reads them back. The EKF runs on the kept floor run.
+Both chessboard routes are calibrated on one frame of ``FLOOR_BOARDS["t265"]`` (``gpo.book.runs.route_config``), as
+chapter 04 does. Each floor run is kept on disk (``gpo.book.runs.floor_run``), so that ``python -m gpo table4``
+computes them once and chapter 09 reads them back. The EKF runs on the kept floor run.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
-import cv2
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-import gpo
-import gpo.cache
 from gpo.bag import Recording
+from gpo.book.runs import floor_run, route_config
 from gpo.fusion import fuse
 from gpo.metrics import Evaluation, evaluate
-from gpo.pipeline import OdometryConfig, config_to_dict, load_config, run, tracking_path
-from gpo.sim.motion import TrackingDrift, named_plan, tracking_odometry
-from gpo.sim.record import (
-    FLOOR_BOARDS,
-    GROUND_TRUTH_TOPIC,
-    START_NS,
-    fingerprint_sources,
-    floor_board_image,
-    recording,
-)
-from gpo.sim.rigs import RIGS
-from gpo.trajectory import Trajectory, base_from_sensor_odometry
+from gpo.pipeline import OdometryConfig, load_config, tracking_path
+from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
 PATHS = ("long1", "long2", "long3")
 ROUTE_NAMES = {"gpi": "GPI", "ortho-gpi": "ortho-GPI", "analytic": "analytic"}
-# the modules a floor run goes through: a change in any of them makes the kept runs stale
-RUN_MODULES = (
-    "bag.py", "camera.py", "cubemap.py", "features.py", "flow.py", "ground.py", "kinematics.py", "pipeline.py",
-)
 
 
 @dataclass(frozen=True)
@@ -84,86 +65,6 @@ ROWS = (
     Row("floor", "gpo-rigid", "analytic"),
     Row("floor", "features", "ortho-gpi"),
 )
-
-
-@dataclass(frozen=True)
-class FloorRun:
-    """A floor run's path of base_link (``trajectory``), the flow's inlier tracks behind each step (0 where the
-    step was coasted, held or first), its speed, frames per second, and the inliers' spread (pixels, NaN where
-    unknown) behind each step."""
-
-    trajectory: Trajectory
-    inliers: np.ndarray
-    frames_per_second: float
-    spread_px: np.ndarray | None = None
-
-
-def drifted_tracking(path: str, drift: TrackingDrift, seed: int) -> Trajectory:
-    """The fisheye rig's tracking camera along the named ``path`` with ``drift`` seeded by ``seed``, stamped as the
-    recordings are and turned into base_link through the rig's mount: a new drift without a new rendering."""
-    mount = RIGS["t265"]().mount
-    odometry = tracking_odometry(named_plan(path), mount, 200.0, drift, seed, START_NS)
-    start = (Rotation.identity(), np.zeros(3))
-    return base_from_sensor_odometry(odometry, (mount.body_rotation, mount.position), start)
-
-
-def board_image_path() -> Path:
-    """A PNG of the simulated T265 rig's view of ``FLOOR_BOARDS["t265"]`` (written into the cache on first use, keyed
-    by the simulator's sources like the recordings)."""
-    path = gpo.cache.path("recordings", "floor_board_t265", gpo.cache.key(sources=fingerprint_sources()), ".png")
-    if not path.exists():
-        gpo.cache.write(path, lambda partial: cv2.imwrite(str(partial), floor_board_image("t265")))
-    return path
-
-
-def route_config(method: str, route: str, base: OdometryConfig | None = None) -> OdometryConfig:
-    """``base`` (default: the shipped config) with ``method`` on the floor image of ``route``; the chessboard routes
-    calibrated on ``board_image_path()``."""
-    base = base or load_config()
-    if route == "analytic":
-        return base.replace(method=method, route=route)
-    return base.replace(method=method, route=route, board_image=board_image_path(), board=FLOOR_BOARDS["t265"])
-
-
-def floor_run(bag, config: OdometryConfig, cache: bool = True) -> FloorRun:
-    """``gpo.pipeline.run`` of ``bag`` with ``config`` (a floor method), read from the disk cache when kept."""
-    path = _run_path(Path(bag), config)
-    if cache and path.exists():
-        with np.load(path) as kept:
-            poses = kept["poses"]
-            trajectory = Trajectory.from_planar(kept["stamps_ns"], *poses.T, frame_id="odom")
-            spread = kept["spread_px"] if "spread_px" in kept.files else None  # kept before spreads were
-            return FloorRun(trajectory, kept["inliers"], float(kept["frames_per_second"]), spread)
-    result = run(bag, config, progress=False)
-    if result.error:
-        raise ValueError(f"{bag}: the floor run stopped early, {result.error}")
-    kept = [r for r in result.records if r.status != "skipped"]
-    done = FloorRun(
-        result.floor_trajectory,
-        np.array([r.inliers if r.status == "measured" else 0 for r in kept]),
-        result.frames_per_second,
-        np.array([r.spread_px for r in kept]),
-    )
-    if cache:
-        planar = np.column_stack([done.trajectory.positions[:, :2], done.trajectory.yaw])
-        arrays = {
-            "stamps_ns": done.trajectory.stamps_ns,
-            "poses": planar,
-            "inliers": done.inliers,
-            "frames_per_second": done.frames_per_second,
-            "spread_px": done.spread_px,
-        }
-        gpo.cache.write(path, lambda partial: np.savez(partial, **arrays))
-    return done
-
-
-def _run_path(bag: Path, config: OdometryConfig) -> Path:
-    document = config_to_dict(config)
-    document.get("floor_image", {}).pop("board_image", None)  # the image's content is fixed by the sources below
-    package = Path(gpo.__file__).parent
-    sources = [*(package / module for module in RUN_MODULES), package / "sim" / "record.py"]  # record: the board
-    key = gpo.cache.key(bag.name, document, sources=sources)
-    return gpo.cache.path("runs", f"{bag.stem}-{config.method}-{config.route}", key, ".npz")
 
 
 @dataclass(frozen=True)

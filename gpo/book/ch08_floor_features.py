@@ -1,0 +1,264 @@
+"""Chapter 08, the second paper's floor feature odometer: a recording's frames, keypoints, matches by fate, the
+histogram filter and the invariance check's loops, and the odometer's panel on one frame pair (the chapter's Table 2
+is ``gpo.book.ch08_table2``)."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import time
+
+import ipywidgets as widgets
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.collections import LineCollection, PatchCollection, PolyCollection
+from matplotlib.patches import Circle
+
+from gpo.bag import Recording
+from gpo.book.panels import int_slider, slider
+from gpo.features import DETECTORS, FeatureParameters, FeatureTracker, detect
+
+
+def frames_of(bag, start: int = 0, stop: int | None = None) -> list[tuple[int, np.ndarray]]:
+    """(stamp ns, grey image) of the camera frames ``start`` .. ``stop`` - 1 of the recording at ``bag``."""
+    with Recording(bag) as recorded:
+        chosen = itertools.islice(recorded.frames(gray=True, progress=False), start, stop)
+        return [(frame.stamp_ns, frame.image) for frame in chosen]
+
+
+def draw_floor_frames(images: dict, frame: int) -> plt.Figure:
+    """One grey camera frame of each floor (name -> image (H, W)) side by side, each titled with its name and the
+    frame's number ``frame``."""
+    fig, axes = plt.subplots(1, len(images), figsize=(5 * len(images), 3.4))
+    for ax, (kind, image) in zip(np.atleast_1d(axes), images.items(), strict=True):
+        ax.imshow(image, cmap="gray", vmin=0, vmax=255)
+        ax.set_title(f"{kind}, frame {frame}")
+        ax.axis("off")
+    fig.tight_layout()
+    return fig
+
+
+def _frame(image, ax=None) -> plt.Axes:
+    """A grey 8-bit frame (H, W) on ``ax`` (a new figure when None), pixel centres at whole (u, v), no axes."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 4.5))
+    ax.imshow(image, cmap="gray", vmin=0, vmax=255)
+    ax.set_xlim(-0.5, image.shape[1] - 0.5)
+    ax.set_ylim(image.shape[0] - 0.5, -0.5)
+    ax.set_axis_off()
+    return ax
+
+
+def draw_keypoints(image, keypoints, ax=None) -> plt.Axes:
+    """A grey frame (H, W) with its keypoints (``gpo.features.Keypoints``, pixels of the full image), each a circle
+    of its diameter ``size``."""
+    ax = _frame(image, ax)
+    circles = [Circle(point, size / 2) for point, size in zip(keypoints.points, keypoints.sizes, strict=True)]
+    ax.add_collection(PatchCollection(circles, facecolor="none", edgecolor="yellow", lw=0.8))
+    ax.set_title(f"{len(keypoints)} keypoints")
+    return ax
+
+
+MATCH_FATES = {  # a match's fate -> its colour
+    "rejected by the histogram filter": "tab:red",
+    "rejected by the invariance check": "tab:orange",
+    "kept": "tab:green",
+    "not filtered: frame flagged": "tab:gray",
+}
+
+
+def match_fates(matches) -> dict[str, np.ndarray]:
+    """Which of the M matches of a ``gpo.features.FeatureMatches`` met each fate of ``MATCH_FATES`` (M,) bool. A
+    frame flagged before any stage ran keeps none: its matches are all "not filtered: frame flagged"."""
+    through_histogram = matches.histogram_kept
+    unfiltered = matches.flag is not None and matches.histogram is None and matches.invariance is None
+    return {
+        "rejected by the histogram filter": ~through_histogram,
+        "rejected by the invariance check": through_histogram & ~matches.kept,
+        "kept": matches.kept & (not unfiltered),
+        "not filtered: frame flagged": matches.kept & unfiltered,
+    }
+
+
+def draw_feature_matches(image, matches, ax=None) -> plt.Axes:
+    """The current grey frame (H, W) with every match of a ``gpo.features.FeatureMatches``: a line from its start
+    (previous frame) to its end (this frame), pixels of the full image, with a dot at the end, coloured by its fate
+    (``MATCH_FATES``, the flagged frame's only when it has some); the legend counts each fate."""
+    ax = _frame(image, ax)
+    start, end = matches.matched
+    fates = match_fates(matches)
+    for fate, chosen in fates.items():
+        if chosen.any() or fate != "not filtered: frame flagged":
+            segments = np.stack([start[chosen], end[chosen]], axis=1)
+            colour = MATCH_FATES[fate]
+            ax.add_collection(LineCollection(segments, colors=colour, lw=1, label=f"{chosen.sum()} {fate}"))
+            ax.plot(*end[chosen].T, ".", ms=3, color=colour)
+    ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
+    ax.set_title(f"{fates['kept'].sum()} of {len(matches.pairs)} matches kept")
+    return ax
+
+
+def draw_match_histogram(stage, ax=None, label: str = "orientation (deg)") -> plt.Axes:
+    """One histogram of the filter (a ``gpo.features.HistogramStage``) as bars over ``label``, the values' unit
+    (degrees for the orientation, pixels for the length), with lines at its mean mu and at mu +- sigma and that band
+    shaded; the filter keeps a band never narrower than the keypoints' localisation, so it may keep a little more.
+    An empty histogram (mean NaN) is drawn without the lines."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 3.5))
+    ax.stairs(stage.counts, stage.edges, fill=True, color="tab:blue")
+    if np.isfinite(stage.mean):
+        mean, sigma = stage.mean, stage.sigma
+        ax.axvspan(mean - sigma, mean + sigma, color="tab:green", alpha=0.15)
+        ax.axvline(mean, color="tab:green", lw=1.2, label=f"mu = {mean:.2f}")
+        ax.axvline(mean - sigma, color="tab:green", lw=0.8, ls="--", label=f"mu +- sigma, sigma = {sigma:.2f}")
+        ax.axvline(mean + sigma, color="tab:green", lw=0.8, ls="--")
+        ax.legend(loc="upper right", fontsize="small")
+    ax.set_xlabel(label)
+    ax.set_ylabel("matches")
+    ax.set_title(f"{int(stage.kept.sum())} of {len(stage.values)} kept")
+    return ax
+
+
+def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.Axes:
+    """The loops of the invariance check (the second paper's Algorithm 1, its Figs. 7-8) of a
+    ``gpo.features.FeatureMatches`` on the previous grey frame (H, W): each a closed polygon through its matches'
+    start points, pixels of the full image, kept loops green and rejected ones red, at most ``max_loops`` of each
+    (the first tried). When the check did not run, only the frame."""
+    ax = _frame(image, ax)
+    check = matches.invariance
+    if check is None:
+        ax.set_title("the invariance check did not run")
+        return ax
+    start = matches.matched[0][np.flatnonzero(matches.histogram_kept)]  # the check's input, which its loops index
+    loops = np.array(check.loops, dtype=int).reshape(-1, check.cardinality)
+    for kept, colour, name in ((True, "tab:green", "kept"), (False, "tab:red", "rejected")):
+        shown = loops[check.kept_loops == kept][:max_loops]
+        polygons = PolyCollection(start[shown], closed=True, facecolors="none", edgecolors=colour, lw=0.8)
+        polygons.set_label(f"{len(shown)} {name} loops shown")
+        ax.add_collection(polygons)
+    ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
+    ax.set_title(f"{int(check.kept_loops.sum())} of {len(loops)} loops kept, C = {check.cardinality}")
+    return ax
+
+
+HISTOGRAM_FATES = {  # which histogram dropped a match -> its colour
+    "dropped by the orientation band": "tab:red",
+    "dropped by the length band": "tab:orange",
+    "kept by both bands": "tab:green",
+}
+
+
+def draw_histogram_decisions(image, matches, ax=None, scale: float = 5.0, centre_px=None) -> plt.Axes:
+    """The histogram filter's decisions (the second paper's mu +- sigma bands) on the grey frame (H, W): each match
+    vector of a ``gpo.features.FeatureMatches`` drawn from its start, ``scale`` times its length, coloured by
+    ``HISTOGRAM_FATES``. ``centre_px`` (u, v), pixels: the centre of the frame pair's rotation, marked with a cross,
+    or when outside the frame, an arrow from the frame's centre towards it. When the filter did not run, only the
+    frame."""
+    ax = _frame(image, ax)
+    if matches.histogram is None:
+        ax.set_title("the histogram filter did not run")
+        return ax
+    start, end = matches.matched
+    orientation, length = matches.histogram
+    by_length = length.kept if length is not None else np.zeros(len(start), bool)
+    fates = {
+        "dropped by the orientation band": ~orientation.kept,
+        "dropped by the length band": orientation.kept & ~by_length,
+        "kept by both bands": by_length,
+    }
+    for fate, chosen in fates.items():
+        tips = start[chosen] + scale * (end[chosen] - start[chosen])
+        lines = LineCollection(np.stack([start[chosen], tips], axis=1), colors=HISTOGRAM_FATES[fate], lw=1.2)
+        lines.set_label(f"{chosen.sum()} {fate}")
+        ax.add_collection(lines)
+        ax.plot(*tips.T, ".", ms=3, color=HISTOGRAM_FATES[fate])
+    if centre_px is not None:
+        height, width = image.shape
+        centre = np.asarray(centre_px, dtype=float)
+        if 0 <= centre[0] < width and 0 <= centre[1] < height:
+            ax.plot(*centre, "x", ms=12, mew=2.5, color="tab:blue", label="centre of rotation")
+        else:
+            middle = np.array([width / 2, height / 2])
+            towards = (centre - middle) / np.linalg.norm(centre - middle) * 0.3 * min(width, height)
+            ax.annotate(
+                "", xy=middle + towards, xytext=middle, arrowprops={"arrowstyle": "->", "color": "tab:blue", "lw": 2}
+            )
+            away = np.hypot(*(centre - middle))
+            ax.plot([], [], color="tab:blue", lw=2, label=f"towards the centre of rotation, {away:.0f} px away")
+    ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
+    ax.set_title(f"the match vectors, {scale:g} times their length")
+    return ax
+
+
+def feature_panel(previous_image, current_image, parameters: FeatureParameters | None = None) -> widgets.VBox:
+    """The second paper's floor feature odometer on one frame pair: the detector, the invariance check's threshold t
+    and cardinality C, the histograms' bins and Lowe's ratio test (1.0: off).
+
+    ``previous_image`` and ``current_image``: consecutive grey frames (H, W) uint8; ``parameters``: the
+    ``FeatureParameters`` the controls start from (default: SIFT) and the rest of the settings. Each detector's
+    keypoints are found once and kept, so that the other controls only match and filter again
+    (``FeatureTracker.matches``). Top: the matches on the current frame by fate, and the orientation histogram;
+    bottom: the length histogram, and the loops of the invariance check on the previous frame. One line reads out
+    the counts after each stage, the flag and each stage's time (detection's is that of the current frame, once).
+    """
+    base = parameters or FeatureParameters(detector="sift")
+    style = {"description_width": "initial"}
+    sizes = sorted({3, 4, 5, 6, base.cardinality} - {None})
+    controls = {
+        "detector": widgets.Dropdown(options=DETECTORS, value=base.detector, description="detector", style=style),
+        "invariance_threshold": slider("t", base.invariance_threshold, 0.5, 1.0, 0.01),
+        "cardinality": widgets.Dropdown(  # 0 stands for None, "auto": a Dropdown's None is no choice at all
+            options=[("auto", 0), *((str(size), size) for size in sizes)],
+            value=base.cardinality or 0,
+            description="C",
+            style=style,
+        ),
+        "orientation_bins": int_slider("orientation bins", base.orientation_bins, 10, 360),
+        "length_bins": int_slider("length bins", base.length_bins, 10, 320),
+        "ratio": slider("ratio test", base.ratio, 0.5, 1.0, 0.01),
+    }
+    found = {}  # detector -> the previous and current frames' keypoints and the current frame's detection seconds
+
+    def keypoints(detector: str):
+        if detector not in found:
+            chosen = dataclasses.replace(base, detector=detector)
+            previous = detect(previous_image, chosen)
+            started = time.perf_counter()
+            current = detect(current_image, chosen)
+            found[detector] = previous, current, time.perf_counter() - started
+        return found[detector]
+
+    def redraw(**values) -> None:
+        chosen = dataclasses.replace(base, **(values | {"cardinality": values["cardinality"] or None}))
+        previous, current, seconds = keypoints(chosen.detector)
+        matches = FeatureTracker(chosen).matches(previous, current, {"detect": seconds})
+        plt.close("all")
+        _, axes = plt.subplots(2, 2, figsize=(12, 8), gridspec_kw={"hspace": 0.3})
+        draw_feature_matches(current_image, matches, ax=axes[0, 0])
+        stages = matches.histogram or (None, None)
+        names = (("orientation", "deg"), ("length", "px"))
+        for ax, stage, (name, unit) in zip((axes[0, 1], axes[1, 0]), stages, names, strict=True):
+            if stage is None:
+                ax.set_title(f"no {name} histogram")
+                ax.set_axis_off()
+            else:
+                draw_match_histogram(stage, ax=ax, label=f"{name} ({unit})")
+        draw_invariance_loops(previous_image, matches, ax=axes[1, 1])
+        print(feature_matches_text(matches))
+        plt.show()
+
+    sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
+    return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+def feature_matches_text(matches) -> str:
+    """One line about a ``gpo.features.FeatureMatches``: the matches left after each stage that ran, the flag if
+    any, and each stage's wall time in milliseconds."""
+    counts = [f"{len(matches.pairs)} matches"]
+    if matches.histogram is not None:
+        counts.append(f"{int(matches.histogram_kept.sum())} after the histogram filter")
+    if matches.invariance is not None:
+        counts.append(f"{int(matches.kept.sum())} after the invariance check")
+    flag = f"; flagged: {matches.flag}" if matches.flag is not None else ""
+    times = ", ".join(f"{stage} {1e3 * seconds:.1f} ms" for stage, seconds in matches.seconds.items())
+    return f"{', '.join(counts)}{flag} ({times})"

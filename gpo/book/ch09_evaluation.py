@@ -1,0 +1,250 @@
+"""Chapter 09, evaluation: evo's own command line beside ``gpo.metrics``, evaluated paths over the truth and their
+errors along the distance, Table 4's rows (``gpo.book.ch09_table4``) compared and drawn, the EKF's knobs tried on
+Table 4's inputs, and a panel over every row under the alignment chosen."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ProcessPoolExecutor
+from itertools import pairwise
+from multiprocessing import get_context
+from pathlib import Path
+
+import ipywidgets as widgets
+import matplotlib.pyplot as plt
+import numpy as np
+from evo.tools import file_interface
+
+from gpo.bag import Recording
+from gpo.book.ch09_table4 import PATHS
+from gpo.book.runs import floor_run, route_config
+from gpo.fusion import FusionSettings, fuse
+from gpo.metrics import MAX_STAMP_DIFFERENCE_S, Alignment, evaluate, final_error
+from gpo.pipeline import tracking_path
+from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+
+
+def draw_evaluated_paths(evaluations: dict, ax=None, styles: dict | None = None) -> plt.Axes:
+    """Top view of evaluated estimates (label -> ``gpo.metrics.Evaluation``), each where its evaluation's alignment
+    put it, over the truth (a wide grey line: the associated truth with the most poses); the start, the truth's end
+    (a cross) and each estimate's end (a dot) marked."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 5))
+    styles = styles or {}
+    truth = max((evaluation.truth for evaluation in evaluations.values()), key=len)
+    ax.plot(*truth.positions[:, :2].T, color="k", lw=5, alpha=0.2, label="truth")
+    for label, evaluation in evaluations.items():
+        placed = evaluation.estimate.positions[:, :2]
+        (line,) = ax.plot(*placed.T, label=label, **{"lw": 1.2, **styles.get(label, {})})
+        ax.plot(*placed[-1], "o", color=line.get_color(), ms=4)
+    ax.plot(*truth.positions[0, :2], "go", label="start")
+    ax.plot(*truth.positions[-1, :2], "kx", ms=9, mew=2, label="end (truth)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return ax
+
+
+def draw_evaluation_errors(evaluations: dict, ax=None, styles: dict | None = None, kind: str = "position") -> plt.Axes:
+    """Each evaluation's error (label -> ``gpo.metrics.Evaluation``) against the distance the truth travelled from its
+    first associated pose, metres: ``kind`` "position" (evo's APE of each pose, millimetres) or "heading" (the
+    estimate's yaw minus the truth's, degrees)."""
+    errors = {
+        "position": (lambda evaluation: 1e3 * evaluation.position_errors_m, "position error [mm]"),
+        "heading": (lambda evaluation: np.degrees(evaluation.heading_errors_rad), "heading error [deg]"),
+    }
+    if kind not in errors:
+        raise ValueError(f"unknown kind {kind!r}: expected {' or '.join(errors)}")
+    values, ylabel = errors[kind]
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 4))
+    styles = styles or {}
+    for label, evaluation in evaluations.items():
+        ax.plot(evaluation.distances_m, values(evaluation), label=label, **{"lw": 1.2, **styles.get(label, {})})
+    if kind == "heading":
+        ax.axhline(0.0, color="k", lw=0.8)
+    ax.set_xlabel("distance travelled by the truth [m]")
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return ax
+
+
+def evaluation_panel(table, shown: tuple | None = None) -> widgets.VBox:
+    """Every row of a Table 4 (``gpo.book.ch09_table4.Table4``) on one path, under the alignment chosen.
+
+    ``table.evaluations[row][path]`` holds each row's estimate placed on the truth at its first pose (``origin``,
+    shown as it is); for ``se2``, ``se3`` or ``posyaw`` the panel aligns it again (``gpo.metrics.evaluate``, once
+    per row, path and alignment; an alignment that moves the whole path is the same from either start) and draws
+    the paths over the truth and their position errors along the distance travelled. ``shown``: the rows selected
+    at first (default: the table's first three). One line a row reads out its APE RMSE and maximum, final position
+    error in mm and % of the distance, and heading RMSE.
+    """
+    labels = {row.label: row for row in table.rows}
+    style = {"description_width": "initial"}
+    controls = {
+        "path": widgets.Dropdown(options=table.paths, value=table.paths[0], description="path", style=style),
+        "alignment": widgets.Dropdown(
+            options=[mode.value for mode in Alignment if mode is not Alignment.NONE],
+            value=Alignment.ORIGIN.value,
+            description="alignment",
+            style=style,
+        ),
+        "chosen": widgets.SelectMultiple(
+            options=list(labels),
+            value=[row.label for row in (shown or table.rows[:3])],
+            rows=min(len(labels), 8),
+            description="rows",
+            layout={"width": "34em"},
+            style=style,
+        ),
+    }
+
+    aligned = {}  # (label, path, alignment) -> Evaluation, each computed once
+
+    def evaluated(label: str, path: str, alignment: str):
+        placed = table.evaluations[labels[label]][path]
+        if alignment == Alignment.ORIGIN:
+            return placed
+        if (label, path, alignment) not in aligned:
+            aligned[label, path, alignment] = evaluate(placed.estimate, placed.truth, alignment)
+        return aligned[label, path, alignment]
+
+    def redraw(path: str, alignment: str, chosen: tuple[str, ...]) -> None:
+        plt.close("all")
+        if not chosen:
+            print("choose at least one row")
+            return
+        evaluations = {label: evaluated(label, path, alignment) for label in chosen}
+        _, (left, right) = plt.subplots(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [1, 1.2]})
+        draw_evaluated_paths(evaluations, ax=left)
+        left.set_title(f"{path}, aligned by {alignment}")
+        draw_evaluation_errors(evaluations, ax=right)
+        right.set_title("how far from the truth, along the way")
+        for label, evaluation in evaluations.items():
+            final = evaluation.final
+            print(
+                f"{label:<38} APE RMSE {1e3 * evaluation.ape_m.rmse:6.1f} mm, max {1e3 * evaluation.ape_m.max:6.1f} mm;"
+                f" final {1e3 * final.position_m:6.1f} mm ({final.percent:.2f} %); heading RMSE"
+                f" {evaluation.heading_rmse_deg:.2f} deg"
+            )
+        plt.show()
+
+    return widgets.VBox([widgets.HBox(list(controls.values())), widgets.interactive_output(redraw, controls)])
+
+
+def evo_ape_statistics(truth_file: Path, estimate_file: Path, flags: list[str]) -> dict[str, float]:
+    """The APE statistics (metres: rmse, mean, median, max, ...) that evo's own command line, ``evo_ape tum``, saves for
+    two TUM files, with its alignment ``flags`` (e.g. ``--align_origin``) and the association of ``gpo.metrics``."""
+    with tempfile.TemporaryDirectory() as folder:
+        saved = Path(folder) / "ape.zip"
+        command = [str(Path(sys.executable).parent / "evo_ape"), "tum", str(truth_file), str(estimate_file), *flags,
+                   "--t_max_diff", str(MAX_STAMP_DIFFERENCE_S), "--save_results", str(saved), "--no_warnings"]
+        subprocess.run(command, check=True, capture_output=True, text=True)
+        return file_interface.load_res_file(saved).stats
+
+
+def fusion_inputs(paths=PATHS, settings: FusionSettings | None = None) -> dict[str, tuple]:
+    """path -> (GPO's floor run on the ortho-GPI, kept on disk (``gpo.book.runs.floor_run``); the tracking camera's
+    path of base_link (``gpo.pipeline.tracking_path`` with ``settings``, default the package's); the truth)."""
+    settings = settings or FusionSettings()
+    inputs = {}
+    for path in paths:
+        bag = recording(path, progress=False)
+        with Recording(bag) as recorded:
+            floor = floor_run(bag, route_config("gpo", "ortho-gpi"))
+            inputs[path] = floor, tracking_path(recorded, settings), recorded.trajectory(GROUND_TRUTH_TOPIC)
+    return inputs
+
+
+def fused_final(floor, tracking, truth, settings: FusionSettings) -> tuple[float, float]:
+    """(final position error, % of the distance; final heading error, degrees) of the EKF of ``floor`` (a
+    ``FloorRun``) and ``tracking`` with ``settings``, against ``truth``."""
+    error = final_error(fuse(floor.trajectory, floor.inliers, tracking, settings, floor.spread_px).trajectory, truth)
+    return error.percent, float(np.degrees(error.heading_rad))
+
+
+class FusionKnobs:
+    """``fused_final`` on every path of ``inputs`` (``fusion_inputs``) for each (floor turn sigma rad/s, angular
+    process noise rad/s^2 per sqrt(Hz)) of ``grid``, the rest of ``settings`` kept: started at once in worker
+    processes (all cores but one), so that the chapter goes on meanwhile; ``finals()`` waits for them."""
+
+    def __init__(self, inputs: dict, settings: FusionSettings, grid):
+        self._pool = ProcessPoolExecutor(max(1, (os.cpu_count() or 1) - 1), mp_context=get_context("fork"))
+        self._pending = {}
+        for turn, noise in grid:
+            chosen = dataclasses.replace(settings, floor_turn_sigma_radps=turn, angular_accel_radps2=noise)
+            for path, (floor, tracking, truth) in inputs.items():
+                self._pending[path, turn, noise] = self._pool.submit(fused_final, floor, tracking, truth, chosen)
+
+    def finals(self) -> dict[tuple, tuple[float, float]]:
+        """(path, turn sigma, angular noise) -> ``fused_final``'s (percent, degrees), once every run is done."""
+        finals = {key: job.result() for key, job in self._pending.items()}
+        self._pool.shutdown()
+        return finals
+
+
+def ordered(table, *chain) -> str:
+    """Whether the rows of ``chain`` (of a ``Table4``) come in increasing order of translation error, on the mean over
+    the paths and on every path: one line."""
+    errors = dict(zip(table.rows, table.translation_errors_m(), strict=True))
+    on_mean = all(errors[a].mean() < errors[b].mean() for a, b in pairwise(chain))
+    on_paths = all(np.all(errors[a] < errors[b]) for a, b in pairwise(chain))
+    return f"mean: {on_mean!s:<5}  every path: {on_paths}"
+
+
+ROW_COLOURS = {  # (source, method) of a row of Table 4 -> its colour
+    ("camera", None): "tab:orange",
+    ("floor", "gpo"): "tab:red",
+    ("fused", "gpo"): "tab:purple",
+    ("floor", "gpo-exact"): "tab:blue",
+    ("fused", "gpo-exact"): "tab:cyan",
+    ("floor", "gpo-rigid"): "tab:green",
+    ("fused", "gpo-rigid"): "tab:olive",
+    ("floor", "features"): "tab:brown",
+}
+ROUTE_LINES = {None: "-", "ortho-gpi": "-", "gpi": "--", "analytic": ":"}  # a row's route -> its line style
+
+
+def row_styles(rows) -> dict[str, dict]:
+    """Each row's label -> its line's style: colour by source and method, dashes by route, the EKF's lines thicker."""
+    return {
+        row.label: {
+            "color": ROW_COLOURS[row.source, row.method],
+            "ls": ROUTE_LINES[row.route],
+            "lw": 2.2 if row.source == "fused" else 1.2,
+        }
+        for row in rows
+    }
+
+
+def draw_table4_paths(table, styles: dict, end_m: float = 0.45) -> plt.Figure:
+    """Every row of a ``Table4`` on each of its paths (one row of panels a path): the paths over the truth, the last
+    ``end_m`` metres around the truth's end, and the position error along the way; one legend below."""
+    fig, axes = plt.subplots(len(table.paths), 3, figsize=(17, 5 * len(table.paths)),
+                             gridspec_kw={"width_ratios": [1.1, 1, 1.4]}, squeeze=False)
+    camera = next(row for row in table.rows if row.source == "camera")
+    for (whole, end, along), path in zip(axes, table.paths, strict=True):
+        shown = {row.label: table.evaluations[row][path] for row in table.rows}
+        draw_evaluated_paths(shown, ax=whole, styles=styles)
+        whole.set_title(f"{path}: {table.evaluations[camera][path].final.distance_m:.1f} m")
+        draw_evaluated_paths(shown, ax=end, styles=styles)
+        finish = table.evaluations[camera][path].truth.positions[-1, :2]
+        end.set_aspect("equal", adjustable="box")
+        end.set_xlim(finish[0] - end_m, finish[0] + end_m)
+        end.set_ylim(finish[1] - end_m, finish[1] + end_m)
+        end.set_title(f"{path}: the last {end_m:g} m around the truth's end")
+        draw_evaluation_errors(shown, ax=along, styles=styles)
+        along.set_title(f"{path}: position error along the way")
+        for ax in (whole, end, along):
+            ax.get_legend().remove()
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize="small")
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
+    return fig
