@@ -1,8 +1,10 @@
 """The first paper's Table 1 under its definitions (``gpo.book.ch04_table1.paper_table1``)."""
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
+from gpo.book.ch04_ortho_gpi import table1_errors_panel
 from gpo.book.ch04_table1 import CALIBRATION_ERRORS, PAPER_TABLE1, format_paper_table1, miscalibrated, paper_table1
 from gpo.camera import T265_LIKE
 
@@ -43,3 +45,26 @@ def test_the_format_prints_the_papers_rows_first(table):
     assert text.splitlines()[0].startswith("the paper")
     assert "84.664 (  4.636)" in text and "3207.881 (  1.258)" in text
     assert text.count("(a+c)/2 mm") == 4 and np.isfinite([row.area_mm2 for row in table[1]]).all()
+
+
+def test_without_a_mean_only_the_two_placements_are_measured_and_printed():
+    truth, rows = paper_table1(mean_over=0)
+    assert sorted({row.where for row in rows}) == ["fitted", "second"] and len(rows) == 4
+    text = format_paper_table1(truth, rows)
+    assert "mean over placements" not in text and text.count("(a+c)/2 mm") == 3
+
+
+def test_the_errors_panel_follows_the_picked_corners(capsys):
+    def gpi_second_long_error() -> float:
+        lines = [line for line in capsys.readouterr().out.splitlines() if line.strip().startswith("GPI, second")]
+        return float(lines[-1].split("sides off")[1].split()[0])  # the last redraw's
+
+    panel = table1_errors_panel()
+    controls = {control.description: control for control in panel.children[0].children}
+    at_two_px = gpi_second_long_error()
+    controls["corner pick sigma [px]"].value = 0.0
+    controls["calibration errors x"].value = 0.0
+    exact = gpi_second_long_error()
+    plt.close("all")
+    # hand-picked corners 2 px off move the GPI's long sides by about a millimetre; picked exactly, a few tenths
+    assert at_two_px > 0.5 and exact < at_two_px / 2

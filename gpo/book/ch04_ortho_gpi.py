@@ -12,6 +12,7 @@ import ipywidgets as widgets
 import matplotlib.pyplot as plt
 import numpy as np
 
+from gpo.book.ch04_table1 import CALIBRATION_ERRORS, PAPER_TABLE1, PICK_ERROR_PX, paper_table1
 from gpo.book.figures import draw_floor_image
 from gpo.book.panels import slider
 from gpo.ground import (
@@ -198,3 +199,45 @@ def draw_car_ground_images(car_images: dict, cars: dict, views: dict, lines: dic
     draw_floor_image(views["front"], CAR_FLOORS["front"], ax=axes[2], axes_length=1.0)
     axes[2].set_title("the front camera's ground image")
     return fig
+
+
+def table1_errors_panel(seed: int = 0) -> widgets.VBox:
+    """Table 1's effect against the size of the calibration's errors: ``CALIBRATION_ERRORS`` times a factor and the
+    hand-picked corners' scatter (px, one sigma) on sliders; on release, ``paper_table1`` (one frame per placement,
+    no mean) redrawn as each image's errors on the fitted and on the second placement, the paper's beside them."""
+    controls = {
+        "factor": slider("calibration errors x", 1.0, 0.0, 3.0, 0.25),
+        "pick_px": slider("corner pick sigma [px]", PICK_ERROR_PX, 0.0, 4.0, 0.5),
+    }
+    paper = {image: np.abs(np.subtract(PAPER_TABLE1[image], PAPER_TABLE1["truth"])) for image in ("GPI", "ortho-GPI")}
+
+    def redraw(factor: float, pick_px: float) -> None:
+        errors = {name: factor * value for name, value in CALIBRATION_ERRORS.items()}
+        plt.close("all")
+        try:
+            truth, rows = paper_table1(calibration_errors=errors, pick_error_px=pick_px, mean_over=0, seed=seed)
+        except GroundImageError as error:
+            print(f"no Table 1 with these errors: {error}")
+            return
+        _, axes = plt.subplots(1, 2, figsize=(12, 3.8))
+        for ax, columns, unit in ((axes[0], (0, 1), "mm"), (axes[1], (2,), "mm^2")):
+            labels = [f"{row.image}, {row.where}" for row in rows] + ["GPI, the paper", "ortho-GPI, the paper"]
+            for k, column in enumerate(columns):
+                measured = [abs((row.long_mm, row.short_mm, row.area_mm2)[column] - truth[column]) for row in rows]
+                values = [*measured, paper["GPI"][column], paper["ortho-GPI"][column]]
+                offsets = np.arange(len(values)) + 0.4 * k - 0.2 * (len(columns) - 1)
+                ax.barh(offsets, values, height=0.8 / len(columns), label=("(a+c)/2", "(b+d)/2", "S")[column])
+            ax.set_yticks(np.arange(len(labels)), labels)
+            ax.set_xscale("log")
+            ax.set_xlabel(f"error [{unit}], log scale")
+            ax.legend(loc="lower right")
+        axes[0].set_title("the block's sides")
+        axes[1].set_title("its area")
+        plt.tight_layout()
+        for row in rows:
+            print(f"{row.image:>9}, {row.where:<6}: sides off {abs(row.long_mm - truth[0]):6.3f} and "
+                  f"{abs(row.short_mm - truth[1]):6.3f} mm, area {abs(row.area_mm2 - truth[2]):7.2f} mm^2")
+        plt.show()
+
+    sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
+    return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])

@@ -192,8 +192,8 @@ def paper_table1(
     for eq. 22 are those found in the front face moved by ``pick_error_px`` (seeded) as a hand picks them; the
     second homography is fitted to the block in that GPI, on one frame of ``FLOOR_BOARDS["t265"]``. The block is
     then measured in one frame at that placement ("fitted"), in one frame at ``SECOND_PLACEMENT`` ("second"), and
-    averaged over ``mean_over`` placements of ``table1_placements`` ("mean"). The truth: 4 and 2 squares of the
-    board and their product.
+    averaged over ``mean_over`` placements of ``table1_placements`` ("mean"; none for 0). The truth: 4 and 2
+    squares of the board and their product.
     """
     rig, board = t265_rig(), FLOOR_BOARDS["t265"]
     renderer = FloorRenderer(rig, make_floor("raised", ROOM_FLOOR_M, TEXEL_M["t265"], seed))
@@ -211,10 +211,11 @@ def paper_table1(
 
     second = placed(*SECOND_PLACEMENT)
     frames = {"fitted": [(frame, board)], "second": [(renderer.render(np.zeros(3), seed + 1, (second,)), second)]}
-    frames["mean"] = []
-    for index, shift in enumerate(table1_placements(mean_over, seed=seed + 1), start=2):
-        other = placed(*shift)
-        frames["mean"].append((renderer.render(np.zeros(3), frame_seed=seed + index, boards=(other,)), other))
+    if mean_over:
+        frames["mean"] = []
+        for index, shift in enumerate(table1_placements(mean_over, seed=seed + 1), start=2):
+            other = placed(*shift)
+            frames["mean"].append((renderer.render(np.zeros(3), frame_seed=seed + index, boards=(other,)), other))
     rows = []
     for name, table in tables.items():
         for where, views in frames.items():
@@ -241,6 +242,8 @@ def format_paper_table1(truth, rows) -> str:
     for where, title in wheres.items():
         if where == "paper":
             known, values = PAPER_TABLE1["truth"], {image: PAPER_TABLE1[image] for image in ("GPI", "ortho-GPI")}
+        elif not any(row.where == where for row in rows):
+            continue
         else:
             known = truth
             values = {row.image: (row.long_mm, row.short_mm, row.area_mm2) for row in rows if row.where == where}
