@@ -6,9 +6,10 @@
 ``--draws`` worlds (seeds ``--first-seed`` on, ``gpo.sim.population.draw``: half fisheye rigs of the T265's
 family at any height 0.08-0.30 m, pitch 0-15 degrees, roll +-2 degrees and lever 0.3-0.9 m, with a drifting
 tracking camera; half downward pinhole cameras of other lenses, heights, tilts and places; floors of every kind,
-mixed and of other grains; 4-5 m paths with reverse legs, spins on the spot, and slides for the downward camera's
-omnidirectional robot) are rendered on a Dask cluster (``gpo.sim.population.render_draws``; cached) and swept with
-``gpo.batch.sweep`` (resumable in ``--out``): ``gpo``, ``gpo-exact`` and ``gpo-rigid`` on the fisheye rigs (and
+mixed and of other grains; 2.5-3.5 m paths, so that a shared 2-core machine renders them in time, with reverse
+legs, spins on the spot, and slides for the downward camera's omnidirectional robot) are rendered on a Dask
+cluster (``gpo.sim.population.render_draws``; cached) and swept with ``gpo.batch.sweep`` (resumable in
+``--out``): ``gpo``, ``gpo-exact`` and ``gpo-rigid`` on the fisheye rigs (and
 ``fused``, with ``--fused``), ``features`` on the downward ones.
 
 Each run reads the shipped config of its kind of rig (``gpo/configs/``) changed only as a user adapting it to

@@ -59,7 +59,7 @@ DRIFT = {  # the tracking camera's drift about gpo.sim.motion.T265_DRIFT's
     "yaw_walk_rad_per_sqrt_s": (0.5e-3, 2e-3),
     "position_walk_m_per_sqrt_s": (2.5e-3, 7.5e-3),
 }
-PATH_LENGTH_M = (4.0, 5.0)
+PATH_LENGTH_M = (2.5, 3.5)
 ROOM_M = 2.0  # the robot's rear-axle centre stays within a square room this wide, centred on the start
 SPEED_MPS = {"fisheye": (0.25, 0.5), "downward": (0.25, 0.5)}
 SPIN_RATE_RADPS = (0.35, 0.7)
@@ -199,7 +199,7 @@ def draw_path(
 ) -> list[Segment]:
     """Segments drawn by ``SEGMENT_WEIGHTS`` (slides only when ``holonomic``) until ``length_m`` metres are driven,
     each at a speed drawn from ``speed_mps`` (m/s); a segment that would take base_link out of the ``ROOM_M`` room
-    is drawn again; a kind drawn ``MOST`` times is not drawn again. Spins turn 45-180 degrees either way at
+    is drawn again; a kind drawn ``MOST`` times is not drawn again. Spins turn 45-135 degrees either way at
     ``SPIN_RATE_RADPS``; arcs 30-120 degrees on 0.5-1.5 m, forwards or in reverse; bends 30-90 degrees over
     1-2.5 m."""
     kinds = [kind for kind in SEGMENT_WEIGHTS if holonomic or kind != "slide"]
@@ -222,7 +222,7 @@ def draw_path(
         elif kind == "bend":
             candidate = Bend(side * math.radians(rng.uniform(30.0, 90.0)), float(rng.uniform(1.0, 2.5)), speed)
         elif kind == "spin":
-            candidate = Spin(side * math.radians(rng.uniform(45.0, 180.0)), float(rng.uniform(*SPIN_RATE_RADPS)))
+            candidate = Spin(side * math.radians(rng.uniform(45.0, 135.0)), float(rng.uniform(*SPIN_RATE_RADPS)))
         elif kind == "stop":
             candidate = Stop(float(rng.uniform(0.3, 1.0)))
         else:
