@@ -155,6 +155,10 @@ def report(table: pd.DataFrame, draws: list[Draw]) -> dict:
                         "parameters": parameters[row["recording"]],
                     }
                 )
+    for method, stats in methods.items():
+        listed = [f for f in failing if f["method"] == method]
+        stats["listed"] = len(listed)
+        stats["listed_without_flags"] = sum(not f["explained"] for f in listed)
     return {"methods": methods, "failing": failing}
 
 
@@ -177,7 +181,11 @@ def print_report(result: dict) -> None:
             f"{method:10s} {stats['runs']:4d} {stats['failed']:6d} {_cell(stats['median']):>9s} "
             f"{_cell(stats['p90']):>7s} {_cell(stats['worst']):>8s} {target:>10s}  {stats['worst_draw']}"
         )
-    print(f"\n{len(result['failing'])} runs over their method's target (gpo: over 1 %) or not finished:")
+    unexplained = sum(not f["explained"] for f in result["failing"])
+    print(
+        f"\n{len(result['failing'])} runs over their method's target (gpo: over 1 %) or not finished, "
+        f"{unexplained} of them without a flag, a frame not measured or an error to say why:"
+    )
     for run_ in result["failing"]:
         p = run_["parameters"]
         rig = (
