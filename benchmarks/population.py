@@ -33,11 +33,13 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import yaml
 
 from gpo import cache
 from gpo.batch import Run, cluster_client, sweep
 from gpo.calibfiles import camera_to_kalibr
 from gpo.pipeline import load_config
+from gpo.sim.floors import FLOOR_KINDS
 from gpo.sim.population import Draw, draw, render_draws
 
 CONFIGS = Path(__file__).resolve().parents[1] / "gpo" / "configs"
@@ -104,26 +106,32 @@ def distribution(errors: pd.Series) -> dict:
     }
 
 
-def explanation(row: pd.Series) -> dict:
-    """What a run's summary says of it: its status, error, flags by reason, and frames not measured."""
+def explanation(row: pd.Series, out: Path) -> dict:
+    """What a run's summary (in the sweep folder ``out``) says of it: its status, error, flags by reason, frames not
+    measured, and the distance it measured over the distance driven."""
     flags = json.loads(row["flags"]) if isinstance(row.get("flags"), str) else {}
     frames = {
         name: int(row[f"frames_{name}"])
         for name in ("coasted", "held", "skipped")
         if f"frames_{name}" in row and pd.notna(row[f"frames_{name}"]) and row[f"frames_{name}"]
     }
+    summary_path = out / "runs" / row["key"] / "trajectory.summary.yaml"
+    measured = yaml.safe_load(summary_path.read_text())["distance_m"] if summary_path.is_file() else None
     return {
         "status": row["status"],
         **({"error": row["error"]} if isinstance(row.get("error"), str) and row["error"] else {}),
+        "distance_ratio": None if measured is None else round(measured / row["distance_m"], 4),
         "flags": flags,
         "frames_not_measured": frames,
         "explained": bool(flags or frames or row["status"] != "ok"),
     }
 
 
-def report(table: pd.DataFrame, draws: list[Draw]) -> dict:
-    """The methods' distributions against their targets, and the runs over them with their explanations."""
+def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
+    """The methods' distributions against their targets (over all draws and over the draws whose floor holds each
+    kind), and the runs over them with their explanations (``out``: the sweep's folder)."""
     parameters = {d.label: d.parameters for d in draws}
+    kinds = {d.label: d.setup.floor.kinds for d in draws}
     methods, failing = {}, []
     for method, rows in table.groupby("method", sort=False):
         limit = TARGETS.get(method, REPORTED_OVER.get(method))
@@ -139,6 +147,11 @@ def report(table: pd.DataFrame, draws: list[Draw]) -> dict:
             "p90_target": TARGETS.get(method),
             "target_met": None if method not in TARGETS or stats["p90"] is None else stats["p90"] <= TARGETS[method],
             "median_heading_deg": round(float(finished["final_heading_deg"].abs().median()), 3),
+            "by_floor_kind": {
+                kind: {"draws": int(on.sum()), **distribution(rows.loc[on, "final_error_percent"])}
+                for kind in FLOOR_KINDS
+                if (on := rows["recording"].map(lambda label, kind=kind: kind in kinds[label])).any()
+            },
         }
         for _, row in rows.sort_values("final_error_percent", ascending=False).iterrows():
             over = not (row["final_error_percent"] <= limit)  # NaN (failed) counts as over
@@ -151,7 +164,7 @@ def report(table: pd.DataFrame, draws: list[Draw]) -> dict:
                         "final_error_mm": _rounded(row["final_error_m"] * 1e3, 1),
                         "final_heading_deg": _rounded(row["final_heading_deg"], 3),
                         "over": limit,
-                        **explanation(row),
+                        **explanation(row, out),
                         "parameters": parameters[row["recording"]],
                     }
                 )
@@ -181,6 +194,13 @@ def print_report(result: dict) -> None:
             f"{method:10s} {stats['runs']:4d} {stats['failed']:6d} {_cell(stats['median']):>9s} "
             f"{_cell(stats['p90']):>7s} {_cell(stats['worst']):>8s} {target:>10s}  {stats['worst_draw']}"
         )
+    print("\nper floor kind (draws whose floor holds it; a mix counts under both kinds): median / p90 / worst %")
+    for method, stats in result["methods"].items():
+        cells = [
+            f"{kind} ({s['draws']}) {_cell(s['median'])} / {_cell(s['p90'])} / {_cell(s['worst'])}"
+            for kind, s in stats["by_floor_kind"].items()
+        ]
+        print(f"{method:10s} " + "; ".join(cells))
     unexplained = sum(not f["explained"] for f in result["failing"])
     print(
         f"\n{len(result['failing'])} runs over their method's target (gpo: over 1 %) or not finished, "
@@ -197,7 +217,8 @@ def print_report(result: dict) -> None:
         frames = ", ".join(f"{count} {name}" for name, count in run_["frames_not_measured"].items())
         print(
             f"  {run_['draw']} {run_['method']:9s} {_cell(run_['final_error_percent']):>7s} % "
-            f"heading {_cell(run_['final_heading_deg'])} deg | {rig}, {p['floor']} ({p['photos']}) | {why}"
+            f"distance x{_cell(run_['distance_ratio'])} heading {_cell(run_['final_heading_deg'])} deg | {rig}, "
+            f"{p['floor']} ({p['photos']}) | {why}"
             f"{'; frames ' + frames if frames else ''}{'; ' + run_['error'] if 'error' in run_ else ''}"
             f" | {p['path']}"
         )
@@ -232,7 +253,7 @@ def main() -> int:
     finished = time.perf_counter()
     keys = set(swept.executed) | set(swept.reused)
     table = swept.table[swept.table["key"].isin(keys)]
-    result = report(table, draws)
+    result = report(table, draws, args.out)
     print_report(result)
     print(
         f"\n{len(draws)} draws rendered (or read from the cache) in {rendered - started:.0f} s, {len(runs)} runs "
