@@ -325,6 +325,19 @@ class Recording:
         _, _, _, translation, rotation = _pose(transforms[-1])
         return np.array(translation), np.array(rotation)
 
+    def static_transforms(self) -> dict[str, tuple[str, np.ndarray, np.ndarray]]:
+        """The static tree on /tf_static: each child frame's (parent, translation (3,) m, quaternion (4,) x, y, z, w),
+        the last one recorded of each child winning, as for a latched topic; frame names without a leading "/".
+        Empty when the bag has no /tf_static."""
+        if "/tf_static" not in {topic.name for topic in self.topics()}:
+            return {}
+        tree = {}
+        for message in self._messages(self._connections("/tf_static", (TF_MESSAGE,))):
+            for transform in message.transforms:
+                _, parent, child, translation, rotation = _pose(transform)
+                tree[_frame_name(child)] = (_frame_name(parent), np.array(translation), np.array(rotation))
+        return tree
+
     def camera_info(self, topic: str) -> Camera:
         """The camera of the first sensor_msgs/CameraInfo on ``topic`` (conventions in the module docstring)."""
         return _camera_from_info(self._first_message(topic, (CAMERA_INFO,)), f"{self.path}, topic {topic}")

@@ -188,7 +188,7 @@ def execute(run_: Run, config: OdometryConfig, key: str) -> Outcome:
     with contextlib.suppress(ValueError):  # not on a worker: OpenCV as configured
         get_worker()
         cv2.setNumThreads(1)
-    row = base_row(run_, key) | {"method": config.method}
+    row = base_row(run_, key) | {"method": str(config.method)}
     try:
         with Recording(run_.recording) as recorded:
             truth = recorded.trajectory(run_.truth_topic)

@@ -32,6 +32,7 @@ import time
 import warnings
 from collections import Counter
 from dataclasses import dataclass, field, fields
+from enum import StrEnum
 from importlib import resources
 from pathlib import Path
 
@@ -57,9 +58,40 @@ from gpo.rig import Rig
 from gpo.targets import Chessboard, FloorBoard
 from gpo.trajectory import Trajectory, base_from_sensor_odometry
 
-FLOOR_METHODS = ("gpo", "gpo-exact", "gpo-rigid", "features")
-ROUTES = ("analytic", "ortho-gpi", "gpi", "keypoints")
-METHODS = (*FLOOR_METHODS, "fused")
+
+class Method(StrEnum):
+    """The motion estimators (the module docstring says what each does); each is its name in configs."""
+
+    GPO = "gpo"
+    GPO_EXACT = "gpo-exact"
+    GPO_RIGID = "gpo-rigid"
+    FEATURES = "features"
+    FUSED = "fused"
+
+
+class Route(StrEnum):
+    """How a camera frame becomes what the motion is measured on (``OdometryConfig`` says what each does)."""
+
+    ANALYTIC = "analytic"
+    ORTHO_GPI = "ortho-gpi"
+    GPI = "gpi"
+    KEYPOINTS = "keypoints"
+
+
+class Status(StrEnum):
+    """What became of a frame: its motion measured, the robot coasted or held across it, the frame skipped, or the
+    first frame."""
+
+    MEASURED = "measured"
+    COASTED = "coasted"
+    HELD = "held"
+    SKIPPED = "skipped"
+    FIRST = "first"
+
+
+METHODS = tuple(Method)
+FLOOR_METHODS = tuple(method for method in Method if method is not Method.FUSED)
+ROUTES = tuple(Route)
 VECTORS = ("median", "mean")
 RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
 DEFAULT_CONFIG = "sim_t265.yaml"
@@ -89,11 +121,11 @@ class OdometryConfig:
     floor: FloorImage
     klt: KLTParameters = field(default_factory=KLTParameters)
     model: PaperBicycle | None = None
-    method: str = "gpo-exact"
+    method: Method = Method.GPO_EXACT
     vector: str = "median"
     max_gap_s: float = 0.5
     fusion: FusionSettings = field(default_factory=FusionSettings)
-    route: str = "analytic"
+    route: Route = Route.ANALYTIC
     board_image: Path | None = None
     board: FloorBoard | None = None
     features: FeatureParameters = field(default_factory=FeatureParameters)
@@ -101,15 +133,17 @@ class OdometryConfig:
     def __post_init__(self):
         if self.route not in ROUTES:
             raise ValueError(f"unknown route {self.route!r}; the routes are {', '.join(ROUTES)}")
-        if self.route in ("ortho-gpi", "gpi") and (self.board_image is None or self.board is None):
-            raise ValueError(f"the {self.route} route needs board_image (a frame of the floor board) and board")
         if self.method not in METHODS:
             raise ValueError(f"unknown method {self.method!r}; the methods are {', '.join(METHODS)}")
+        object.__setattr__(self, "route", Route(self.route))  # a name from a file or the command line, as a member
+        object.__setattr__(self, "method", Method(self.method))
+        if self.route in (Route.ORTHO_GPI, Route.GPI) and (self.board_image is None or self.board is None):
+            raise ValueError(f"the {self.route} route needs board_image (a frame of the floor board) and board")
         if self.fusion.floor_method not in FLOOR_METHODS:
             floor_method = self.fusion.floor_method
             raise ValueError(f"fusion.floor_method must be one of {', '.join(FLOOR_METHODS)}, got {floor_method!r}")
-        floor_method = self.fusion.floor_method if self.method == "fused" else self.method
-        if self.route == "keypoints" and floor_method != "features":
+        floor_method = self.fusion.floor_method if self.method is Method.FUSED else self.method
+        if self.route is Route.KEYPOINTS and floor_method != Method.FEATURES:
             raise ValueError(
                 f"the keypoints route corrects keypoints: it needs the features method, not {floor_method}"
             )
@@ -166,7 +200,7 @@ def config_to_dict(config: OdometryConfig) -> dict:
             "wheelbase_m": config.model.wheelbase_m,
             "rear_to_reference_m": config.model.rear_to_reference_m,
         },
-        "odometry": {"method": config.method, "vector": config.vector, "max_gap_s": config.max_gap_s},
+        "odometry": {"method": str(config.method), "vector": config.vector, "max_gap_s": config.max_gap_s},
         "fusion": config.fusion.to_dict(),
         "features": {f.name: getattr(config.features, f.name) for f in fields(config.features)},
     }
@@ -203,11 +237,11 @@ def _route(section: FloorImageSection, path: Path) -> dict:
 
 
 def _route_to_dict(config: OdometryConfig) -> dict:
-    if config.route in ("analytic", "keypoints"):
-        return {} if config.route == "analytic" else {"route": config.route}
+    if config.route in (Route.ANALYTIC, Route.KEYPOINTS):
+        return {} if config.route is Route.ANALYTIC else {"route": str(config.route)}
     board = config.board
     return {
-        "route": config.route,
+        "route": str(config.route),
         "board_image": str(config.board_image),
         "board": {
             "squares": list(board.board.squares),
@@ -225,13 +259,13 @@ def floor_table(config: OdometryConfig) -> RemapTable:
     image may lie outside the view; those pixels are masked); the ``keypoints`` route, which makes no floor image,
     has the analytic one, for people to look at."""
     camera, floor = config.rig.camera, config.floor
-    if config.route in ("analytic", "keypoints"):
+    if config.route in (Route.ANALYTIC, Route.KEYPOINTS):
         return analytic_table(camera, config.rig.mount, floor, max_outside=0.5)
     image = cv2.imread(str(config.board_image), cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise ValueError(f"cannot read the floor board's image {config.board_image} (the {config.route} route)")
     gpi = ground_plane_image(image, camera, config.board)
-    if config.route == "gpi":
+    if config.route is Route.GPI:
         return gpi.resampled(floor, max_outside=0.5)
     return ortho_rectify(gpi, gpi.table.apply(image), config.board, floor, max_outside=0.5).table
 
@@ -258,8 +292,11 @@ class FrameRecord:
     kept: int
     inliers: int
     spread_px: float
-    status: str
+    status: Status
     flag: str | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "status", Status(self.status))  # a status given by its name, as a member
 
 
 class FloorOdometer:
@@ -270,11 +307,20 @@ class FloorOdometer:
     def __init__(self, config: OdometryConfig):
         self.config = config
         self.table = floor_table(config)
-        if config.method == "features":
+        if config.method is Method.FEATURES:
             self.motion = FeatureTracker(config.features)
-            self._mask = None if config.route == "keypoints" else self.table.valid.astype(np.uint8)
+            self._mask = None if config.route is Route.KEYPOINTS else self.table.valid.astype(np.uint8)
         else:
             self.motion = FloorFlow(config.klt, mask=self.table.valid)
+        estimators = {
+            Method.GPO: self._paper_increment,
+            Method.GPO_EXACT: self._exact_increment,
+            Method.GPO_RIGID: self._rigid_step,
+            Method.FEATURES: self._feature_increment,
+        }
+        if config.method not in estimators:
+            raise ValueError(f"a floor odometer runs one of {', '.join(FLOOR_METHODS)}, not {config.method}")
+        self._estimate = estimators[config.method]  # (measurement, dt) -> (the frame's increment or None, why)
         affine = config.floor.affine
         self._to_metres = affine[:, :2].T.copy(), affine[:, 2].copy()
         self.pose = np.zeros(3)
@@ -294,7 +340,7 @@ class FloorOdometer:
             )
         if image.dtype == np.uint16:
             image = (image >> 8).astype(np.uint8)
-        return image if self.config.route == "keypoints" else self.table.apply(image)
+        return image if self.config.route is Route.KEYPOINTS else self.table.apply(image)
 
     @property
     def _frame_shape(self) -> tuple[int, int]:
@@ -305,7 +351,7 @@ class FloorOdometer:
     def keypoints(self, image: np.ndarray) -> Keypoints:
         """The keypoints of a camera frame as the ``features`` method detects them (in the frame itself for the
         ``keypoints`` route, else in its floor image), to be given to ``step`` in the frame's place."""
-        if self.config.method != "features":
+        if self.config.method is not Method.FEATURES:
             raise ValueError(f"keypoints are the features method's, this odometer's method is {self.config.method}")
         return detect(self.floor_image(image), self.config.features, self._mask)
 
@@ -317,33 +363,33 @@ class FloorOdometer:
         if isinstance(image, np.ndarray) and previous is not None and image.shape[:2] != self._frame_shape:
             image = Unreadable(f"{image.shape[1]} x {image.shape[0]} pixels, not the calibration's")
         if isinstance(image, Unreadable):
-            return self._record(stamp_ns, None, "skipped", f"unreadable frame: {image.reason}")
+            return self._record(stamp_ns, None, Status.SKIPPED, f"unreadable frame: {image.reason}")
         if previous is not None and stamp_ns <= previous:
             problem = "repeats" if stamp_ns == previous else f"is {(previous - stamp_ns) * 1e-9:.3f} s before"
-            return self._record(stamp_ns, None, "skipped", f"stamp out of order: {problem} the previous; skipped")
+            return self._record(stamp_ns, None, Status.SKIPPED, f"stamp out of order: {problem} the previous; skipped")
         floor = image if isinstance(image, Keypoints) else self.floor_image(image)
         self._stamp_ns = stamp_ns
         if previous is None:
             self._track(floor, stamp_ns)
             self._measured_ns = stamp_ns
-            return self._record(stamp_ns, None, "first")
+            return self._record(stamp_ns, None, Status.FIRST)
         dt = (stamp_ns - previous) * 1e-9
         if dt > self.config.max_gap_s:
             self.motion.restart()
             self._track(floor, stamp_ns)
             self._velocity[:] = 0.0
-            return self._record(stamp_ns, None, "held", f"frame gap: {dt:.2f} s without frames, motion unknown")
+            return self._record(stamp_ns, None, Status.HELD, f"frame gap: {dt:.2f} s without frames, motion unknown")
         measurement = self._track(floor, stamp_ns)
         flag = measurement.flag if isinstance(measurement, FeatureMatches) else measurement.quality.flag
         if flag is not None:
             return self._coast(stamp_ns, dt, measurement, flag)
-        increment, why = self._increment(measurement, dt)
+        increment, why = self._estimate(measurement, dt)
         if increment is None:
             return self._coast(stamp_ns, dt, measurement, why)
         self.pose = compose(self.pose, increment)
         self._velocity = increment / dt
         self._measured_ns = stamp_ns
-        return self._record(stamp_ns, measurement, "measured")
+        return self._record(stamp_ns, measurement, Status.MEASURED)
 
     def _track(self, floor: np.ndarray | Keypoints, stamp_ns: int) -> FlowMeasurement | FeatureMatches | None:
         if isinstance(self.motion, FeatureTracker):
@@ -355,27 +401,33 @@ class FloorOdometer:
     def _coast(self, stamp_ns: int, dt: float, measurement, why: str) -> FrameRecord:
         if (stamp_ns - self._measured_ns) * 1e-9 <= self.config.max_gap_s:
             self.pose = compose(self.pose, self._velocity * dt)
-            return self._record(stamp_ns, measurement, "coasted", why)
-        return self._record(stamp_ns, measurement, "held", why)
+            return self._record(stamp_ns, measurement, Status.COASTED, why)
+        return self._record(stamp_ns, measurement, Status.HELD, why)
 
     def _metres(self, uv: np.ndarray) -> np.ndarray:
         matrix, offset = self._to_metres
         return uv @ matrix + offset
 
-    def _increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
-        """The frame's increment, or None and why it cannot be had."""
-        method = self.config.method
-        if method == "features":
-            return self._feature_increment(measurement)
-        if method == "gpo-rigid":
-            increment = self._rigid_increment(measurement)
-            return increment, None if increment is not None else "rigid fit: too few tracks agree"
+    def _vector_motion(self, measurement: FlowMeasurement) -> tuple[np.ndarray, np.ndarray]:
+        """The floor point the vector statistic measures (the tracks' median start) and its displacement, both
+        in base_link, metres."""
         vector = measurement.median if self.config.vector == "median" else measurement.mean
-        moved = self._to_metres[0].T @ vector  # floor displacement in base_link, metres
-        where = self._metres(np.median(measurement.start, axis=0))  # the point whose motion the vector measures
-        if method == "gpo":
-            return self._virtual_wheel_at(where[0]).step(np.zeros(3), -moved, dt), None  # from the origin
+        return self._metres(np.median(measurement.start, axis=0)), self._to_metres[0].T @ vector
+
+    def _paper_increment(self, measurement: FlowMeasurement, dt: float):
+        """``gpo``: the paper's bicycle model on the vector, its virtual wheel at the measured point."""
+        where, moved = self._vector_motion(measurement)
+        return self._virtual_wheel_at(where[0]).step(np.zeros(3), -moved, dt), None  # from the origin
+
+    def _exact_increment(self, measurement: FlowMeasurement, dt: float):
+        """``gpo-exact``: the exact arc that moves the measured point by the vector."""
+        where, moved = self._vector_motion(measurement)
         return increment_from_point_motion(where, where + moved), None
+
+    def _rigid_step(self, measurement: FlowMeasurement, dt: float):
+        """``gpo-rigid``: the rigid motion of the kept tracks."""
+        increment = self._rigid_increment(measurement)
+        return increment, None if increment is not None else "rigid fit: too few tracks agree"
 
     def _virtual_wheel_at(self, wheelbase_m: float) -> PaperBicycle:
         """The configured bicycle model with its virtual front wheel moved to ``wheelbase_m``, l_r in proportion."""
@@ -393,9 +445,10 @@ class FloorOdometer:
         chosen = inliers.ravel().astype(bool)
         return increment_from_point_pairs(start[chosen], end[chosen])
 
-    def _feature_increment(self, matches: FeatureMatches) -> tuple[np.ndarray | None, str | None]:
-        """The rigid 2-D transform of the kept matches in metres (the second paper's (theta, Tx, Ty)) as the robot's
-        increment, fitted again on every match it explains to ``refit_px``; None when the points are collinear."""
+    def _feature_increment(self, matches: FeatureMatches, dt: float) -> tuple[np.ndarray | None, str | None]:
+        """``features``: the rigid 2-D transform of the kept matches in metres (the second paper's (theta, Tx, Ty))
+        as the robot's increment, fitted again on every match it explains to ``refit_px``; None when the points are
+        collinear."""
         parameters = self.config.features
         start, end, on_floor = self._feature_metres(*matches.matched)  # every match once, kept or not
         kept = matches.kept & on_floor
@@ -409,7 +462,7 @@ class FloorOdometer:
 
     def _feature_metres(self, start_px: np.ndarray, end_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Matched pixels as floor points of base_link (metres), and which pairs reach the floor at both ends."""
-        if self.config.route != "keypoints":
+        if self.config.route is not Route.KEYPOINTS:
             return self._metres(start_px), self._metres(end_px), np.ones(len(start_px), dtype=bool)
         camera, mount = self.config.rig.camera, self.config.rig.mount
         (start, seen_start), (end, seen_end) = (pixels_to_floor(camera, mount, p) for p in (start_px, end_px))
@@ -418,7 +471,7 @@ class FloorOdometer:
     @property
     def _feature_pixel_m(self) -> float:
         """About how far on the floor one pixel of the image the keypoints come from reaches, metres."""
-        if self.config.route != "keypoints":
+        if self.config.route is not Route.KEYPOINTS:
             return self.config.floor.metres_per_pixel
         return self.config.rig.mount.height / self.config.rig.camera.fx
 
@@ -474,7 +527,7 @@ class OdometryResult:
     @property
     def floor_trajectory(self) -> Trajectory:
         """The floor odometry's own path of base_link in odom, at every frame that was not skipped."""
-        kept = [r for r in self.records if r.status != "skipped"]
+        kept = [r for r in self.records if r.status is not Status.SKIPPED]
         poses = np.array([r.pose for r in kept]).reshape(-1, 3)
         stamps = np.array([r.stamp_ns for r in kept], dtype=np.int64)
         return Trajectory.from_planar(stamps, poses[:, 0], poses[:, 1], poses[:, 2], frame_id="odom")
@@ -486,8 +539,8 @@ class OdometryResult:
     @property
     def floor_run(self) -> FloorRun:
         """The floor odometry as the EKF reads it (``gpo.fusion.fuse``): its path, each step's inliers and spread."""
-        kept = [r for r in self.records if r.status != "skipped"]
-        inliers = np.array([r.inliers if r.status == "measured" else 0 for r in kept])
+        kept = [r for r in self.records if r.status is not Status.SKIPPED]
+        inliers = np.array([r.inliers if r.status is Status.MEASURED else 0 for r in kept])
         spread = np.array([r.spread_px for r in kept])
         return FloorRun(self.floor_trajectory, inliers, self.frames_per_second, spread)
 
@@ -500,10 +553,10 @@ class OdometryResult:
         return {
             "source": self.source,
             "topic": self.topic,
-            "method": self.config.method,
+            "method": str(self.config.method),
             "vector": self.config.vector,
             "frames": len(self.records),
-            **{f"frames_{status}": statuses.get(status, 0) for status in ("measured", "coasted", "held", "skipped")},
+            **{f"frames_{status}": statuses.get(status, 0) for status in Status if status is not Status.FIRST},
             "flags": dict(reasons.most_common()),
             "distance_m": round(trajectory.path_length, 4),
             "duration_s": round(float(np.ptp(trajectory.times)), 3) if len(trajectory) else 0.0,
@@ -542,7 +595,7 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
     with Recording(bag) as recording, warnings.catch_warnings():
         warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
         topic = _choose_topic(recording, topic, config.rig)
-        if config.method == "fused":  # the tracking camera's topic, odometry and mount, before any frame
+        if config.method is Method.FUSED:  # the tracking camera's topic, odometry and mount, before any frame
             _check_tracking_topic(recording, config.fusion)
             tracking = tracking_path(recording, config.fusion)
             _, note = tracking_mount(recording, config.fusion)
@@ -555,7 +608,7 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
             result = odometry(frames, config, str(bag), topic)
         except ValueError as error:
             raise ValueError(f"{bag}, topic {topic}: {error}") from None
-        if config.method == "fused" and not result.interrupted:
+        if config.method is Method.FUSED and not result.interrupted:
             _fuse_into(result, tracking, config.fusion, note)
             result.seconds = time.perf_counter() - started
     return result
@@ -584,7 +637,7 @@ def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str 
     filters can share one detection. For ``fused`` the floor method's odometry (``run`` adds the filter). Stops at
     the first frame that cannot be read (an error of reading ``frames``) and says why in ``error``, and at Ctrl-C
     (KeyboardInterrupt), keeping the frames before and marking the result ``interrupted``."""
-    fused = config.method == "fused"
+    fused = config.method is Method.FUSED
     odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
     records: list[FrameRecord] = []
     started = time.perf_counter()

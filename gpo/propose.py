@@ -51,7 +51,6 @@ from gpo.rig import CameraMount, Rig
 
 ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
 CAMERA_INFO_TYPE = "sensor_msgs/msg/CameraInfo"
-TF_TYPE = "tf2_msgs/msg/TFMessage"
 DOWNWARD_WITHIN_DEG = 45.0
 """A camera whose optical axis is within this many degrees of straight down gets a region centred below it."""
 BODY_CLEARANCE = 0.8
@@ -171,20 +170,11 @@ def _camera(recording: Recording, info_topic: str | None, camera_file) -> tuple:
 
 def static_tree(recording: Recording) -> dict[str, tuple[str, np.ndarray, Rotation]]:
     """/tf_static as child -> (parent, translation m, rotation parent <- child), the last one of each child winning;
-    empty when the bag has no /tf_static. (``Recording.static_transform`` reads one named pair; the whole tree is read
-    here through its message reader.)"""
-    tree = {}
-    if "/tf_static" not in {t.name for t in recording.topics()}:
-        return tree
-    for message in recording._messages(recording._connections("/tf_static", (TF_TYPE,))):
-        for transform in message.transforms:
-            t, q = transform.transform.translation, transform.transform.rotation
-            tree[transform.child_frame_id.lstrip("/")] = (
-                transform.header.frame_id.lstrip("/"),
-                np.array([t.x, t.y, t.z]),
-                Rotation.from_quat([q.x, q.y, q.z, q.w]),
-            )
-    return tree
+    empty when the bag has no /tf_static."""
+    return {
+        child: (parent, translation, Rotation.from_quat(quaternion))
+        for child, (parent, translation, quaternion) in recording.static_transforms().items()
+    }
 
 
 def chain(tree: dict, parent: str, child: str) -> tuple[Rotation, np.ndarray] | None:

@@ -355,6 +355,7 @@ def test_tf_and_tf_static(tmp_path, bag_format):
     with Recording(path) as recording:
         odom = recording.transform("odom", "/base_link")  # a leading "/" as ROS1 allowed
         translation, quaternion = recording.static_transform("base_link", "camera")
+        tree = recording.static_transforms()
         with pytest.raises(ValueError, match="no transform base_link -> odom; it has map -> odom, odom -> base_link"):
             recording.transform("base_link", "odom")
         with pytest.raises(ValueError, match="base_link -> camera, base_link -> imu"):
@@ -363,6 +364,10 @@ def test_tf_and_tf_static(tmp_path, bag_format):
     np.testing.assert_array_equal(odom.positions[:, 0], [0, 1, 2, 3])
     assert (odom.frame_id, odom.child_frame_id) == ("odom", "base_link")
     np.testing.assert_array_equal(translation, [0.3, 0, 0.12])  # the last one recorded
+    assert {child: parent for child, (parent, _, _) in tree.items()} == {"camera": "base_link", "imu": "base_link"}
+    np.testing.assert_array_equal(tree["imu"][1], [0.1, 0, 0.05])
+    np.testing.assert_array_equal(tree["camera"][1], translation)  # the last one recorded, as static_transform's
+    np.testing.assert_array_equal(tree["camera"][2], [0, 0.7071, 0, 0.7071])
     np.testing.assert_array_equal(quaternion, [0, 0.7071, 0, 0.7071])
 
 

@@ -13,10 +13,14 @@ shaped into one of three floor kinds that mirror the second paper's test floors:
 
 Low-frequency stains and world-fixed lighting go on top of every kind. A mip-map pyramid of
 the texture lets the renderer anti-alias (see ``gpo.sim.render``). Everything is seeded.
+
+A ``FloorDesign`` names what a recording's floor is made of: one kind, or several kinds mixed in patches
+(a hall where planks meet screed), and the photographs its grain comes from (``PHOTOS``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -24,6 +28,9 @@ import numpy as np
 import skimage.data
 
 FLOOR_KINDS = ("wood", "raised", "industrial")
+PHOTOS = ("gravel", "grass", "brick", "moon")  # scikit-image's grey photographs a floor's grain may come from
+DEFAULT_PHOTOS = PHOTOS[:2]
+MIX_EDGE_M = 0.01  # where two kinds of a mixed floor meet, one fades into the other over about this width, metres
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,17 +58,23 @@ class FloorTexture:
 
 
 def make_floor(
-    kind: str, extent: tuple[float, float, float, float], texel: float = 1e-3, seed: int = 0
+    kind: str,
+    extent: tuple[float, float, float, float],
+    texel: float = 1e-3,
+    seed: int | Sequence[int] = 0,
+    photos: Sequence[str] = DEFAULT_PHOTOS,
 ) -> FloorTexture:
-    """A floor of ``kind`` covering ``extent`` = (x_min, x_max, y_min, y_max) metres at ``texel`` metres per texel."""
+    """A floor of ``kind`` covering ``extent`` = (x_min, x_max, y_min, y_max) metres at ``texel`` metres per texel,
+    its grain from ``photos`` (some of ``PHOTOS``); ``seed``: an integer or a sequence of them (numpy's seeding)."""
     if kind not in FLOOR_KINDS:
         raise ValueError(f"unknown floor kind {kind!r}; the kinds are {', '.join(FLOOR_KINDS)}")
+    _check_photos(photos)
     x_min, x_max, y_min, y_max = extent
     if not (x_max > x_min and y_max > y_min and texel > 0):
         raise ValueError(f"a floor needs x_max > x_min, y_max > y_min and texel > 0, got {extent} and {texel}")
     shape = (int(np.ceil((y_max - y_min) / texel)), int(np.ceil((x_max - x_min) / texel)))
     rng = np.random.default_rng(seed)
-    grain = _bombed_grain(shape, rng)
+    grain = _bombed_grain(shape, rng, photos)
     surface = {"wood": _wood, "raised": _raised_floor, "industrial": _industrial}[kind](grain, texel, rng)
     surface *= _low_frequency(shape, texel, cell_m=0.35, rng=rng, amplitude=0.08)  # stains
     surface *= _low_frequency(shape, texel, cell_m=2.0, rng=rng, amplitude=0.12)  # lighting
@@ -71,9 +84,50 @@ def make_floor(
     )
 
 
-def _photo_variants(rng: np.random.Generator, count: int = 24, size: int = 256) -> list[np.ndarray]:
-    """Zero-mean, unit-variance square crops of the photographs, randomly rotated, flipped and scaled."""
-    photos = [getattr(skimage.data, name)().astype(np.float32) for name in ("gravel", "grass")]
+@dataclass(frozen=True)
+class FloorDesign:
+    """What a floor is made of: ``kinds`` (of ``FLOOR_KINDS``; several are mixed in patches of about ``patch_m``
+    metres, each meeting the next over ``MIX_EDGE_M``) and the ``photos`` its grain comes from (of ``PHOTOS``)."""
+
+    kinds: tuple[str, ...]
+    photos: tuple[str, ...] = DEFAULT_PHOTOS
+    patch_m: float = 1.0
+
+    def __post_init__(self):
+        if not self.kinds or any(kind not in FLOOR_KINDS for kind in self.kinds):
+            raise ValueError(f"a floor design needs kinds of {', '.join(FLOOR_KINDS)}, got {self.kinds!r}")
+        _check_photos(self.photos)
+        if not self.patch_m > 0:
+            raise ValueError(f"patch_m must be > 0, got {self.patch_m!r}")
+
+    def texture(self, extent: tuple[float, float, float, float], texel: float, seed: int) -> FloorTexture:
+        """The floor covering ``extent`` (x_min, x_max, y_min, y_max, metres) at ``texel`` metres per texel: one
+        kind as ``make_floor`` makes it, or each kind made with its own seed and blended by the weights
+        softmax(f_k / (``MIX_EDGE_M`` / ``patch_m``)) of smooth random fields f_k varying over ``patch_m``."""
+        if len(self.kinds) == 1:
+            return make_floor(self.kinds[0], extent, texel, seed, self.photos)
+        floors = [make_floor(kind, extent, texel, [seed, k], self.photos) for k, kind in enumerate(self.kinds)]
+        shape = floors[0].levels[0].shape
+        rng = np.random.default_rng([seed, len(self.kinds)])
+        fields = np.stack([_low_frequency(shape, texel, self.patch_m, rng, 1.0) for _ in self.kinds])
+        fields *= self.patch_m / MIX_EDGE_M
+        weights = np.exp(fields - fields.max(axis=0))
+        image = sum(w * f.levels[0] for w, f in zip(weights, floors, strict=True)) / weights.sum(axis=0)
+        image = np.clip(np.rint(image), 0, 255).astype(np.uint8)
+        sheen = any(floor.sheen for floor in floors)
+        return FloorTexture(mip_pyramid(image), floors[0].origin, texel, "+".join(self.kinds), sheen)
+
+
+def _check_photos(photos: Sequence[str]) -> None:
+    if not photos or any(photo not in PHOTOS for photo in photos):
+        raise ValueError(f"a floor's grain comes from some of the photographs {', '.join(PHOTOS)}, got {photos!r}")
+
+
+def _photo_variants(
+    rng: np.random.Generator, photos: Sequence[str], count: int = 24, size: int = 256
+) -> list[np.ndarray]:
+    """Zero-mean, unit-variance square crops of the ``photos``, randomly rotated, flipped and scaled."""
+    photos = [getattr(skimage.data, name)().astype(np.float32) for name in photos]
     variants = []
     for _ in range(count):
         photo = photos[rng.integers(len(photos))]
@@ -91,13 +145,15 @@ def _photo_variants(rng: np.random.Generator, count: int = 24, size: int = 256) 
     return variants
 
 
-def _bombed_grain(shape: tuple[int, int], rng: np.random.Generator, spacing: int = 96) -> np.ndarray:
+def _bombed_grain(
+    shape: tuple[int, int], rng: np.random.Generator, photos: Sequence[str], spacing: int = 96
+) -> np.ndarray:
     """Non-periodic zero-mean, unit-variance grain: feathered photo crops at jittered grid points.
 
     The sum of crops weighted by windows w_i is divided by sqrt(sum w_i^2), which keeps the
     variance constant where crops overlap (a plain weighted mean would fade the contrast there).
     """
-    variants = _photo_variants(rng)
+    variants = _photo_variants(rng, photos)
     size = variants[0].shape[0]
     ramp = np.sin(np.linspace(0.0, np.pi, size, dtype=np.float32)) ** 2
     window = np.outer(ramp, ramp)

@@ -1,18 +1,20 @@
 """Recordings of the simulated rigs, written as ROS bags the way a real robot's would be.
 
 A ``Preset`` names a rig, a path, a floor and a seed, and what disturbs the camera's view of the floor
-(``gpo.sim.render.Disturbances``: sheets dragged across it, glints). ``simulate`` drives the path,
-renders every camera frame and writes one bag holding:
+(``gpo.sim.render.Disturbances``: sheets dragged across it, glints). It stands for a ``Setup``, which holds the
+things themselves (the rig, the motion plan, the floor's design, the tracking camera's drift), so that a
+recording of any rig, path or floor (``gpo.sim.population`` draws them) is rendered the same way.
+``simulate`` drives the path, renders every camera frame and writes one bag holding:
 
 - the camera images (``sensor_msgs/Image``, mono8) and ``camera_info`` on the rig's topics;
 - ``/mocap/base_link`` (``geometry_msgs/PoseStamped``, 120 Hz): ground truth of ``base_link`` in
   ``world``, as a motion-capture system would give it;
-- for the fisheye rig, ``/camera/odom/sample`` (``nav_msgs/Odometry``, 200 Hz): the tracking
-  camera's own drifting odometry, ``camera_pose_frame`` in ``camera_odom_frame``, as realsense-ros
-  publishes it;
+- for a rig with a tracking camera (the fisheye rig: its camera is the T265's), ``/camera/odom/sample``
+  (``nav_msgs/Odometry``, 200 Hz): the tracking camera's own drifting odometry, ``camera_pose_frame`` in
+  ``camera_odom_frame``, as realsense-ros publishes it;
 - ``/tf_static``: the camera's optical frame (and the tracking camera's body frame) in ``base_link``.
 
-``recording(name)`` is the one call the notebooks make: it generates the preset's bag on first
+``recording(name)`` is the one call the notebooks make: it generates the preset's (or setup's) bag on first
 use and returns the cached file. Generation is deterministic, so the bag is the same file byte for
 byte every time; the cache key holds a hash of the simulator's own source, so a changed simulator
 makes a new file.
@@ -32,9 +34,10 @@ from tqdm.auto import tqdm
 
 from gpo import cache
 from gpo.bag import BagWriter
+from gpo.calibfiles import camera_to_kalibr
 from gpo.rig import Rig
-from gpo.sim.floors import make_floor
-from gpo.sim.motion import T265_DRIFT, MotionPlan, named_plan, tracking_odometry
+from gpo.sim.floors import FloorDesign, make_floor
+from gpo.sim.motion import T265_DRIFT, MotionPlan, TrackingDrift, named_plan, tracking_odometry
 from gpo.sim.outages import Outage, apply_outage, outage_at
 from gpo.sim.render import Disturbances, FloorRenderer
 from gpo.sim.rigs import RIGS
@@ -66,6 +69,71 @@ class Preset:
     blur_samples: int = 3
     disturbances: Disturbances = field(default_factory=Disturbances)
     outages: tuple[Outage, ...] = ()
+
+    def setup(self) -> Setup:
+        """What this preset shows: its rig, path, floor and seed; the fisheye rig's T265 drifts as ``T265_DRIFT``."""
+        return Setup(
+            RIGS[self.rig](),
+            named_plan(self.path),
+            FloorDesign((self.floor,)),
+            self.seed,
+            T265_DRIFT if self.rig == "t265" else None,
+            TEXEL_M[self.rig],
+            FLOOR_MARGIN_M[self.rig],
+            self.exposure_s,
+            self.blur_samples,
+            self.disturbances,
+            self.outages,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Setup:
+    """Everything a recording shows: the ``rig`` driving ``plan`` over a ``floor`` made at ``texel_m`` metres per
+    texel, ``floor_margin_m`` beyond the path of the robot and its camera; the ``seed`` of the floor's texture, the
+    sensor's noise and the tracking camera's drift; ``drift``: how the tracking camera's odometry drifts (a tracking
+    camera whose body frame is the rig's camera's, as the T265's fisheye is its own), or None for a rig without one;
+    the exposure, disturbances and outages as ``Preset`` has them."""
+
+    rig: Rig
+    plan: MotionPlan
+    floor: FloorDesign
+    seed: int
+    drift: TrackingDrift | None = None
+    texel_m: float = 1e-3
+    floor_margin_m: float = 2.5
+    exposure_s: float = 0.0
+    blur_samples: int = 3
+    disturbances: Disturbances = field(default_factory=Disturbances)
+    outages: tuple[Outage, ...] = ()
+
+    def description(self) -> dict:
+        """The setup in plain numbers and names (what the recording cache's key hashes)."""
+        rig, plan = self.rig, self.plan
+        return {
+            "rig": {
+                "name": rig.name,
+                "camera": camera_to_kalibr(rig.camera, rig.name),
+                "position_m": [float(v) for v in rig.mount.position],
+                "quaternion_xyzw": [float(v) for v in rig.mount.rotation.as_quat()],
+                "rate_hz": rig.rate_hz,
+                "names": [rig.image_topic, rig.info_topic, rig.frame_id],
+            },
+            "plan": {
+                "segments": [[type(segment).__name__, asdict(segment)] for segment in plan.segments],
+                "start": list(plan.start),
+                "limits": asdict(plan.limits),
+            },
+            "floor": asdict(self.floor),
+            "seed": self.seed,
+            "drift": None if self.drift is None else asdict(self.drift),
+            "texel_m": self.texel_m,
+            "floor_margin_m": self.floor_margin_m,
+            "exposure_s": self.exposure_s,
+            "blur_samples": self.blur_samples,
+            "disturbances": asdict(self.disturbances),
+            "outages": [asdict(outage) for outage in self.outages],
+        }
 
 
 PRESETS = {
@@ -139,6 +207,17 @@ def preset(name: str) -> Preset:
     return PRESETS[name]
 
 
+def setup_of(what: str | Setup, seed: int | None = None) -> tuple[Setup, str]:
+    """The setup of ``what`` (a preset's name, with ``seed`` in place of its own when given, or a setup, then
+    ``seed`` None) and the label its recording is cached under."""
+    if isinstance(what, Setup):
+        if seed is not None:
+            raise ValueError("a seed replaces a preset's; a setup holds its own")
+        return what, f"{what.rig.name}-setup"
+    chosen = preset(what) if seed is None else dataclasses.replace(preset(what), seed=seed)
+    return chosen.setup(), what if chosen.seed == preset(what).seed else f"{what}-seed{seed}"
+
+
 def floor_extent(plan: MotionPlan, rig: Rig, margin: float) -> tuple[float, float, float, float]:
     """(x_min, x_max, y_min, y_max) metres covering the path of the robot and of its camera, plus ``margin``."""
     state = plan.sample(np.linspace(0.0, plan.duration_s, 400))
@@ -150,63 +229,68 @@ def floor_extent(plan: MotionPlan, rig: Rig, margin: float) -> tuple[float, floa
 
 @dataclass(frozen=True, eq=False)
 class Scene:
-    """What preset ``chosen`` shows: the ``rig``, its motion ``plan``, the ``renderer`` of its floor (with the
-    preset's disturbances) and the ``frame_times`` (seconds) of its camera frames."""
+    """What ``setup`` shows: the ``renderer`` of its floor (with its disturbances) and the ``frame_times``
+    (seconds) of its camera frames."""
 
-    chosen: Preset
-    rig: Rig
-    plan: MotionPlan
+    setup: Setup
     renderer: FloorRenderer
     frame_times: np.ndarray
 
     @classmethod
-    def of(cls, name: str, seed: int | None = None) -> Scene:
-        """The scene of preset ``name``; ``seed`` replaces the preset's (its floor's texture and the tracking
-        camera's drift)."""
-        chosen = preset(name) if seed is None else dataclasses.replace(preset(name), seed=seed)
-        rig = RIGS[chosen.rig]()
-        plan = named_plan(chosen.path)
-        floor = make_floor(
-            chosen.floor, floor_extent(plan, rig, FLOOR_MARGIN_M[chosen.rig]), TEXEL_M[chosen.rig], chosen.seed
-        )
+    def of(cls, what: str | Setup, seed: int | None = None) -> Scene:
+        """The scene of ``what``: a preset's name (``seed`` replaces the preset's: its floor's texture and the
+        tracking camera's drift) or a setup."""
+        setup, _ = setup_of(what, seed)
+        rig, plan = setup.rig, setup.plan
+        floor = setup.floor.texture(floor_extent(plan, rig, setup.floor_margin_m), setup.texel_m, setup.seed)
         frame_times = np.arange(0.0, plan.duration_s, 1.0 / rig.rate_hz)
         path = plan.sample(frame_times)
-        disturbances = chosen.disturbances
+        disturbances = setup.disturbances
         renderer = FloorRenderer(
             rig,
             floor,
             sheets=disturbances.place_sheets(frame_times, np.column_stack([path.x, path.y, path.yaw])),
             glints=disturbances.place_glints(),
         )
-        return cls(chosen, rig, plan, renderer, frame_times)
+        return cls(setup, renderer, frame_times)
+
+    @property
+    def rig(self) -> Rig:
+        return self.setup.rig
+
+    @property
+    def plan(self) -> MotionPlan:
+        return self.setup.plan
 
     def frame(self, index: int) -> np.ndarray:
         """Camera frame ``index`` (uint8), the same whoever renders it and in whatever order."""
-        times, poses = _exposure(self.plan, self.frame_times[index], self.chosen)
-        image = self.renderer.render(poses, frame_seed=(self.chosen.seed, index), times_s=times)
-        outage = outage_at(self.chosen.outages, self.frame_times[index])
+        times, poses = _exposure(self.setup, self.frame_times[index])
+        image = self.renderer.render(poses, frame_seed=(self.setup.seed, index), times_s=times)
+        outage = outage_at(self.setup.outages, self.frame_times[index])
         return image if outage is None else apply_outage(outage.kind, image)
 
 
 def simulate(
-    name: str, out, format: str = "ros1", progress: bool = True, seed: int | None = None, jobs: int = 1
+    what: str | Setup, out, format: str = "ros1", progress: bool = True, seed: int | None = None, jobs: int = 1
 ) -> Path:
-    """Render preset ``name`` into a new bag at ``out`` (``format``: ros1, ros2 or ros2-mcap); return its path.
+    """Render ``what`` (a preset's name or a ``Setup``) into a new bag at ``out`` (``format``: ros1, ros2 or
+    ros2-mcap); return its path.
 
-    ``seed`` replaces the preset's (its floor's texture and the tracking camera's drift). ``jobs`` > 1 renders the
+    ``seed`` replaces a preset's (its floor's texture and the tracking camera's drift). ``jobs`` > 1 renders the
     frames in that many processes (the bag is the same, byte for byte).
     """
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, not {jobs}")
-    scene = Scene.of(name, seed)
-    chosen, rig, plan = scene.chosen, scene.rig, scene.plan
+    scene = Scene.of(what, seed)
+    setup, rig, plan = scene.setup, scene.rig, scene.plan
     with BagWriter(out, format) as bag:
-        _write_static_tree(bag, rig)
+        _write_static_tree(bag, setup)
         bag.add_trajectory(GROUND_TRUTH_TOPIC, plan.ground_truth(120.0, START_NS), msgtype="pose")
-        if chosen.rig == "t265":
-            odometry = tracking_odometry(plan, rig.mount, 200.0, T265_DRIFT, chosen.seed, START_NS)
+        if setup.drift is not None:
+            odometry = tracking_odometry(plan, rig.mount, 200.0, setup.drift, setup.seed, START_NS)
             bag.add_trajectory(ODOMETRY_TOPIC, odometry)
-        frames = _frames(name, seed, scene, jobs)
+        frames = _frames(setup, scene, jobs)
+        name = what if isinstance(what, str) else rig.name
         counted = tqdm(frames, desc=f"rendering {name}", total=len(scene.frame_times), disable=not progress)
         for time_s, image in zip(scene.frame_times, counted, strict=True):
             stamp_ns = START_NS + round(time_s * 1e9)
@@ -219,21 +303,21 @@ FRAMES_PER_TASK = 16  # frames a rendering process renders at a time
 _WORKER_SCENE: dict[str, Scene] = {}  # in a rendering process: the scene it renders
 
 
-def _frames(name: str, seed: int | None, scene: Scene, jobs: int) -> Iterator[np.ndarray]:
-    """The frames of ``scene`` (preset ``name`` with ``seed``) in order, rendered here or by ``jobs`` processes."""
+def _frames(setup: Setup, scene: Scene, jobs: int) -> Iterator[np.ndarray]:
+    """The frames of ``scene`` (of ``setup``) in order, rendered here or by ``jobs`` processes."""
     count = len(scene.frame_times)
     if jobs == 1:
         yield from (scene.frame(index) for index in range(count))
         return
     tasks = [range(start, min(start + FRAMES_PER_TASK, count)) for start in range(0, count, FRAMES_PER_TASK)]
-    with ProcessPoolExecutor(jobs, initializer=_start_rendering, initargs=(name, seed)) as pool:
+    with ProcessPoolExecutor(jobs, initializer=_start_rendering, initargs=(setup,)) as pool:
         for images in pool.map(_render, tasks):
             yield from images
 
 
-def _start_rendering(name: str, seed: int | None) -> None:
-    """In a rendering process: set up the scene of preset ``name`` (with ``seed``) once."""
-    _WORKER_SCENE["scene"] = Scene.of(name, seed)
+def _start_rendering(setup: Setup) -> None:
+    """In a rendering process: set up the scene of ``setup`` once."""
+    _WORKER_SCENE["scene"] = Scene.of(setup)
 
 
 def _render(indices: range) -> list[np.ndarray]:
@@ -241,22 +325,23 @@ def _render(indices: range) -> list[np.ndarray]:
     return [_WORKER_SCENE["scene"].frame(index) for index in indices]
 
 
-def _exposure(plan: MotionPlan, time_s: float, chosen: Preset) -> tuple[np.ndarray, np.ndarray]:
+def _exposure(setup: Setup, time_s: float) -> tuple[np.ndarray, np.ndarray]:
     """Times (K,) seconds and poses (K, 3) over the exposure centred on ``time_s``, kept inside the plan."""
-    if chosen.exposure_s <= 0:
+    plan = setup.plan
+    if setup.exposure_s <= 0:
         times = np.array([time_s])
     else:
-        half = 0.5 * chosen.exposure_s
-        times = np.clip(np.linspace(time_s - half, time_s + half, chosen.blur_samples), 0.0, plan.duration_s)
+        half = 0.5 * setup.exposure_s
+        times = np.clip(np.linspace(time_s - half, time_s + half, setup.blur_samples), 0.0, plan.duration_s)
     state = plan.sample(times)
     return times, np.column_stack([state.x, state.y, state.yaw])
 
 
-def _write_static_tree(bag: BagWriter, rig: Rig) -> None:
-    """The camera's optical frame (and, for the fisheye, the tracking camera's body frame) in base_link."""
-    mount = rig.mount
-    bag.add_static_transform("base_link", rig.frame_id, mount.position, mount.rotation.as_quat(), START_NS)
-    if rig.name == "t265":
+def _write_static_tree(bag: BagWriter, setup: Setup) -> None:
+    """The camera's optical frame (and, with a tracking camera, its body frame) in base_link."""
+    mount = setup.rig.mount
+    bag.add_static_transform("base_link", setup.rig.frame_id, mount.position, mount.rotation.as_quat(), START_NS)
+    if setup.drift is not None:
         bag.add_static_transform(
             "base_link", "camera_pose_frame", mount.position, mount.body_rotation.as_quat(), START_NS
         )
@@ -278,21 +363,27 @@ def fingerprint_sources() -> list[Path]:
 
 
 def recording(
-    name: str = "sample", format: str = "ros1", progress: bool = True, seed: int | None = None, jobs: int = 1
+    what: str | Setup = "sample",
+    format: str = "ros1",
+    progress: bool = True,
+    seed: int | None = None,
+    jobs: int = 1,
+    label: str | None = None,
 ) -> Path:
-    """The bag of preset ``name`` (with ``seed`` in place of its own, when given): generated on first use, then read
-    from the cache (``gpo.cache``, ``recordings``).
+    """The bag of ``what``: a preset's name (with ``seed`` in place of its own, when given) or a ``Setup``;
+    generated on first use, then read from the cache (``gpo.cache``, ``recordings``, named ``label``: by default
+    the preset's name, or the rig's for a setup).
 
-    Its key holds the preset, the format and the simulator's sources (``fingerprint_sources``). Each process renders
-    into a file of its own and renames it into place when complete, so processes that want the same recording at
-    once never read one another's half-written bag (the files are identical). ``jobs``: processes rendering its frames.
+    Its key holds the setup (``Setup.description``), the format and the simulator's sources
+    (``fingerprint_sources``). Each process renders into a file of its own and renames it into place when complete,
+    so processes that want the same recording at once never read one another's half-written bag (the files are
+    identical). ``jobs``: processes rendering its frames.
     """
-    chosen = preset(name) if seed is None else dataclasses.replace(preset(name), seed=seed)
-    key = cache.key(asdict(chosen), format, sources=fingerprint_sources())
-    label = name if chosen.seed == preset(name).seed else f"{name}-seed{seed}"
-    path = cache.path("recordings", label, key, ".bag" if format == "ros1" else "")
+    setup, own_label = setup_of(what, seed)
+    key = cache.key(setup.description(), format, sources=fingerprint_sources())
+    path = cache.path("recordings", label or own_label, key, ".bag" if format == "ros1" else "")
     if not path.exists():
-        cache.write(path, lambda partial: simulate(name, partial, format, progress, seed, jobs))
+        cache.write(path, lambda partial: simulate(what, partial, format, progress, seed, jobs))
     return path
 
 
