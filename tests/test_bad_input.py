@@ -847,7 +847,7 @@ def test_force_and_a_good_fit_replace_the_calibration(tmp_path, capsys, monkeypa
 def test_simulate_checks_its_output_before_rendering(tmp_path, capsys, monkeypatch, out, arguments, code, words):
     (tmp_path / "existing.bag").write_bytes(b"an earlier bag")
     (tmp_path / "folder").mkdir()
-    monkeypatch.setattr("gpo.__main__.simulate", lambda *a, **k: pytest.fail("rendered"))
+    monkeypatch.setattr("gpo.sim.record.simulate", lambda *a, **k: pytest.fail("rendered"))  # imported when run
     check(capsys, [tmp_path], ["simulate", "--preset", "test", "--out", tmp_path / out, *arguments], code, *words)
 
 
