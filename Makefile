@@ -42,10 +42,11 @@ tables: recordings
 		$(BIN)/python -m gpo.book.ch08_table2 I II IV V VI VII VIII > /dev/null; table2=$$?; \
 		wait $$table4 && exit $$table2'
 
-# two workers (pytest-xdist), each test file on one of them: a notebook's cells share one kernel
+# two workers (pytest-xdist), each test file on one of them: a notebook's cells share one kernel; the log lists the
+# 25 slowest tests, where the time goes
 test: $(STAMP) $(CHROMIUM) recordings tables
 	$(BIN)/ruff check .
-	$(PHASE) pytest $(BIN)/python -m pytest -p no:cacheprovider -n 2 --dist loadfile
+	$(PHASE) pytest $(BIN)/python -m pytest -p no:cacheprovider -n 2 --dist loadfile --durations=25
 
 test-browser: $(STAMP) $(CHROMIUM) recordings
 	$(BIN)/python -m pytest -p no:cacheprovider tests/browser
