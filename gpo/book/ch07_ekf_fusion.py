@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import FuncFormatter
 
+from gpo.book.figures import draw_placed_paths
 from gpo.book.panels import slider
 from gpo.fusion import FilterDiverged, FusionSettings, OdometryFusion, fuse, increment_covariance
 from gpo.kinematics import arc_increment
@@ -20,21 +21,8 @@ from gpo.metrics import final_error, place_on_truth
 def draw_paths_on_truth(paths: dict, truth, ax=None, styles: dict | None = None) -> plt.Axes:
     """Top view of trajectories (label -> ``Trajectory``) against ``truth``, each placed on the truth at its first
     pose (``gpo.metrics.place_on_truth``); the truth a wide grey line, the start and each path's end marked."""
-    if ax is None:
-        _, ax = plt.subplots(figsize=(7, 5))
-    styles = styles or {}
-    ax.plot(*truth.positions[:, :2].T, color="k", lw=5, alpha=0.2, label="truth")
-    for label, trajectory in paths.items():
-        placed = place_on_truth(trajectory, truth)[0].positions[:, :2]
-        (line,) = ax.plot(*placed.T, label=label, **{"lw": 1.2, **styles.get(label, {})})
-        ax.plot(*placed[-1], "o", color=line.get_color(), ms=4)
-    ax.plot(*truth.positions[0, :2], "go", label="start")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
-    return ax
+    placed = {label: place_on_truth(trajectory, truth)[0].positions[:, :2] for label, trajectory in paths.items()}
+    return draw_placed_paths(placed, truth, ax, styles)
 
 
 def draw_position_errors(paths: dict, truth, ax=None, styles: dict | None = None) -> plt.Axes:

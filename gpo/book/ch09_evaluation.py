@@ -21,6 +21,7 @@ from evo.tools import file_interface
 
 from gpo.bag import Recording
 from gpo.book.ch09_table4 import PATHS
+from gpo.book.figures import draw_placed_paths
 from gpo.book.runs import floor_run, route_config
 from gpo.fusion import FusionSettings, fuse
 from gpo.metrics import MAX_STAMP_DIFFERENCE_S, Alignment, evaluate, final_error
@@ -32,23 +33,9 @@ def draw_evaluated_paths(evaluations: dict, ax=None, styles: dict | None = None)
     """Top view of evaluated estimates (label -> ``gpo.metrics.Evaluation``), each where its evaluation's alignment
     put it, over the truth (a wide grey line: the associated truth with the most poses); the start, the truth's end
     (a cross) and each estimate's end (a dot) marked."""
-    if ax is None:
-        _, ax = plt.subplots(figsize=(7, 5))
-    styles = styles or {}
     truth = max((evaluation.truth for evaluation in evaluations.values()), key=len)
-    ax.plot(*truth.positions[:, :2].T, color="k", lw=5, alpha=0.2, label="truth")
-    for label, evaluation in evaluations.items():
-        placed = evaluation.estimate.positions[:, :2]
-        (line,) = ax.plot(*placed.T, label=label, **{"lw": 1.2, **styles.get(label, {})})
-        ax.plot(*placed[-1], "o", color=line.get_color(), ms=4)
-    ax.plot(*truth.positions[0, :2], "go", label="start")
-    ax.plot(*truth.positions[-1, :2], "kx", ms=9, mew=2, label="end (truth)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
-    return ax
+    placed = {label: evaluation.estimate.positions[:, :2] for label, evaluation in evaluations.items()}
+    return draw_placed_paths(placed, truth, ax, styles, truth_end=True)
 
 
 def draw_evaluation_errors(evaluations: dict, ax=None, styles: dict | None = None, kind: str = "position") -> plt.Axes:

@@ -1,5 +1,5 @@
-"""Figures more than one chapter draws, and the command line's: paths seen from above, a floor image where it
-lies in base_link, a sweep's errors."""
+"""Figures more than one chapter draws, and the command line's: paths seen from above (alone, or placed on the
+truth), a floor image where it lies in base_link, a sweep's errors."""
 
 from __future__ import annotations
 
@@ -20,6 +20,27 @@ def draw_paths(paths: dict, ax=None, styles: dict | None = None) -> plt.Axes:
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
+    ax.legend(fontsize="small")
+    return ax
+
+
+def draw_placed_paths(placed: dict, truth, ax=None, styles: dict | None = None, truth_end: bool = False) -> plt.Axes:
+    """Top view of paths already placed on ``truth`` (label -> (N, 2) x, y metres) over it: the truth a wide grey
+    line, the start and each path's end (a dot) marked, and with ``truth_end`` the truth's end (a cross)."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 5))
+    styles = styles or {}
+    ax.plot(*truth.positions[:, :2].T, color="k", lw=5, alpha=0.2, label="truth")
+    for label, positions in placed.items():
+        (line,) = ax.plot(*positions.T, label=label, **{"lw": 1.2, **styles.get(label, {})})
+        ax.plot(*positions[-1], "o", color=line.get_color(), ms=4)
+    ax.plot(*truth.positions[0, :2], "go", label="start")
+    if truth_end:
+        ax.plot(*truth.positions[-1, :2], "kx", ms=9, mew=2, label="end (truth)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
     return ax
 
