@@ -616,9 +616,7 @@ def analytic_points(
     """
     mount = _as_mount(mount)
     xy = floor.pixel_to_base(floor.pixel_centres())
-    points = np.concatenate([xy, np.zeros((*xy.shape[:-1], 1))], axis=-1) - mount.position
-    in_camera = mount.rotation.inv().apply(points.reshape(-1, 3)).reshape(points.shape)
-    uv, valid = camera.project(in_camera)
+    uv, valid = camera.project(mount.to_camera(np.concatenate([xy, np.zeros((*xy.shape[:-1], 1))], axis=-1)))
     valid &= camera.in_image(uv)
     uv[~valid] = np.nan
     return uv, valid

@@ -237,8 +237,7 @@ def draw_mount(image: np.ndarray, camera: Camera, measured: MeasuredMount) -> np
 
 def _polyline(picture: np.ndarray, camera: Camera, mount: CameraMount, points_base: np.ndarray, colour) -> None:
     """Floor points (N, 3) in base_link drawn as lines where they lie ahead of the camera and project."""
-    in_camera = mount.rotation.inv().apply(points_base - mount.position)
-    pixels, valid = camera.project(in_camera)
+    pixels, valid = camera.project(mount.to_camera(points_base))
     valid &= np.isfinite(pixels).all(axis=1)
     valid &= (np.abs(pixels) < 4 * max(camera.width, camera.height)).all(axis=1)
     for run in np.split(np.arange(len(valid)), np.flatnonzero(np.diff(valid.astype(int))) + 1):

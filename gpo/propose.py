@@ -11,7 +11,7 @@ Given: ``--camera`` (a calibration file, in place of camera_info) and ``--mount`
 The floor-image region (``floor_region``), in base_link (x forward, y left, z up, origin at the rear axle's
 centre on the floor):
 
-- a camera looking ahead (its optical axis more than ``DOWNWARD_WITHIN_DEG`` from straight down): a square of
+- a camera looking ahead (its optical axis more than ``DOWNWARD_BELOW_DEG`` from straight down): a square of
   ``REGION_PIXELS`` floor pixels on the floor line ahead of the camera, starting ``BODY_CLEARANCE`` camera heights
   ahead of the camera's foot, so that its rays are no steeper than atan(1 / BODY_CLEARANCE) below the horizon and
   the robot's own body, below and behind the camera, stays out of it;
@@ -44,15 +44,13 @@ from gpo.calibfiles import camera_to_kalibr
 from gpo.config import load_mount
 from gpo.ground import FloorImage
 from gpo.kinematics import PaperBicycle
-from gpo.measure_mount import load_camera
+from gpo.measure_mount import DOWNWARD_BELOW_DEG, load_camera
 from gpo.outputs import check_output, write_with
 from gpo.pipeline import DEFAULT_CONFIG, OdometryConfig, config_to_dict, load_config
 from gpo.rig import CameraMount, Rig
 
 ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
 CAMERA_INFO_TYPE = "sensor_msgs/msg/CameraInfo"
-DOWNWARD_WITHIN_DEG = 45.0
-"""A camera whose optical axis is within this many degrees of straight down gets a region centred below it."""
 BODY_CLEARANCE = 0.8
 """A forward camera's region starts this many camera heights ahead of the camera's foot."""
 REGION_PIXELS = 200
@@ -177,17 +175,17 @@ def static_tree(recording: Recording) -> dict[str, tuple[str, np.ndarray, Rotati
     }
 
 
-def chain(tree: dict, parent: str, child: str) -> tuple[Rotation, np.ndarray] | None:
-    """``child``'s pose in ``parent`` (rotation parent <- child, translation m) along the static ``tree``, or None
-    when ``child`` does not lead up to ``parent``."""
-    rotation, translation, frame = Rotation.identity(), np.zeros(3), child
-    while frame != parent:
-        if frame not in tree:
+def chain(tree: dict, parent: str, child: str) -> tuple[Rotation, np.ndarray, list[str]] | None:
+    """``child``'s pose in ``parent`` (rotation parent <- child, translation m) along the static ``tree`` and the
+    frames walked from ``child`` up to ``parent``, or None when ``child`` does not lead up to ``parent``."""
+    rotation, translation, frames = Rotation.identity(), np.zeros(3), [child]
+    while frames[-1] != parent:
+        if frames[-1] not in tree:
             return None
-        up, step_translation, step_rotation = tree[frame]
+        up, step_translation, step_rotation = tree[frames[-1]]
         rotation, translation = step_rotation * rotation, step_rotation.apply(translation) + step_translation
-        frame = up
-    return rotation, translation
+        frames.append(up)
+    return rotation, translation, frames
 
 
 def _mount_of(recording: Recording, frame_id: str, mount_file) -> tuple[CameraMount, str]:
@@ -203,12 +201,10 @@ def _mount_of(recording: Recording, frame_id: str, mount_file) -> tuple[CameraMo
             f"{recording.path}: /tf_static does not lead from base_link to the camera's frame {frame_id} (it holds "
             f"{held}): give the mount with --mount mount.yaml (gpo mount measures it from a board on the floor)"
         )
-    path, frame = [frame_id], frame_id
-    while frame != "base_link":
-        frame = tree[frame][0]
-        path.append(frame)
-    mount = CameraMount(found[1], found[0])
-    return check_mount(mount, "/tf_static"), "the bag's /tf_static: " + " -> ".join(reversed(path))
+    rotation, translation, frames = found
+    return check_mount(CameraMount(translation, rotation), "/tf_static"), "the bag's /tf_static: " + " -> ".join(
+        reversed(frames)
+    )
 
 
 def check_mount(mount: CameraMount, source: str) -> CameraMount:
@@ -250,7 +246,7 @@ def footprint(camera, mount: CameraMount, point) -> float:
 def _project(camera, mount: CameraMount, floor_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pixels (N, 2) of floor points (N, 2) in base_link and whether each lies in the image, ``MARGIN_PX`` in."""
     points = np.column_stack([floor_xy, np.zeros(len(floor_xy))])
-    pixels, valid = camera.project(mount.rotation.inv().apply(points - mount.position))
+    pixels, valid = camera.project(mount.to_camera(points))
     pixels = np.nan_to_num(pixels, nan=-1e9)
     inside = (pixels >= MARGIN_PX).all(axis=1) & (pixels[:, 0] <= camera.width - 1 - MARGIN_PX)
     inside &= pixels[:, 1] <= camera.height - 1 - MARGIN_PX
@@ -264,7 +260,7 @@ def floor_region(camera, mount: CameraMount) -> tuple[FloorImage, str]:
     height = mount.height
     axis = mount.rotation.apply([0.0, 0.0, 1.0])
     foot = mount.position[:2]
-    if -axis[2] > np.cos(np.radians(DOWNWARD_WITHIN_DEG)):
+    if -axis[2] > np.cos(np.radians(DOWNWARD_BELOW_DEG)):
         centre = foot - height * axis[:2] / axis[2]
         half = [DOWN_FILL * _reach(camera, mount, centre, direction) for direction in np.eye(2)]
         scale = footprint(camera, mount, centre)

@@ -70,6 +70,11 @@ class CameraMount:
         """base <- camera body frame (x forward, y left, z up), as a tracking camera reports its pose."""
         return self.rotation * OPTICAL_IN_BODY.inv()
 
+    def to_camera(self, points_base) -> np.ndarray:
+        """Points (..., 3) of base_link, metres, in the optical frame (x right, y down, z forward)."""
+        points = np.asarray(points_base, dtype=float) - self.position
+        return self.rotation.inv().apply(points.reshape(-1, 3)).reshape(points.shape)
+
 
 @dataclass(frozen=True, eq=False)
 class Rig:

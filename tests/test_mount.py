@@ -251,3 +251,12 @@ def test_a_pose_behind_the_camera_is_refused(monkeypatch):
     monkeypatch.setattr(gpo.mount, "_initial_pose", behind)
     with pytest.raises(MountError, match="behind the camera"):
         mount_from_corners(true_corners(rig, placement), rig.camera, placement.board, placement, kind=kind)
+
+
+def test_a_mount_takes_base_link_points_into_the_optical_frame():
+    mount = CameraMount.forward(0.6, 0.1, 0.12, pitch=np.radians(90.0))  # looking straight down from 0.12 m
+    below, ahead, left = mount.to_camera([[0.6, 0.1, 0.0], [0.7, 0.1, 0.12], [0.6, 0.3, 0.12]])
+    np.testing.assert_allclose(below, [0.0, 0.0, 0.12], atol=1e-12)  # the floor below: straight ahead of the lens
+    np.testing.assert_allclose(ahead, [0.0, -0.1, 0.0], atol=1e-12)  # forward in base_link: up in the image
+    np.testing.assert_allclose(left, [-0.2, 0.0, 0.0], atol=1e-12)  # left in base_link: left in the image
+    assert mount.to_camera(np.zeros((4, 5, 3))).shape == (4, 5, 3)
