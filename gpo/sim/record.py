@@ -34,7 +34,7 @@ from tqdm.auto import tqdm
 
 from gpo import cache
 from gpo.bag import BagWriter
-from gpo.config import rig_to_dict
+from gpo.calibfiles import camera_to_kalibr
 from gpo.rig import Rig
 from gpo.sim.floors import FloorDesign, make_floor
 from gpo.sim.motion import T265_DRIFT, MotionPlan, TrackingDrift, named_plan, tracking_odometry
@@ -109,9 +109,16 @@ class Setup:
 
     def description(self) -> dict:
         """The setup in plain numbers and names (what the recording cache's key hashes)."""
-        plan = self.plan
+        rig, plan = self.rig, self.plan
         return {
-            "rig": rig_to_dict(self.rig),
+            "rig": {
+                "name": rig.name,
+                "camera": camera_to_kalibr(rig.camera, rig.name),
+                "position_m": [float(v) for v in rig.mount.position],
+                "quaternion_xyzw": [float(v) for v in rig.mount.rotation.as_quat()],
+                "rate_hz": rig.rate_hz,
+                "names": [rig.image_topic, rig.info_topic, rig.frame_id],
+            },
             "plan": {
                 "segments": [[type(segment).__name__, asdict(segment)] for segment in plan.segments],
                 "start": list(plan.start),
