@@ -289,15 +289,23 @@ def floor_runs(base: OdometryConfig | None = None) -> dict[str, FloorRun]:
     return runs
 
 
+FLOORS_RUNS = "floors"  # the name that asks ``main`` for chapter 08's runs over the three floors
+
+
 def main() -> None:
+    names = [e.number for e in EXPERIMENTS] + [FLOORS_RUNS]
     parser = argparse.ArgumentParser(
         prog="python -m gpo.book.ch08_table2", description="Compute and keep the runs of the second paper's Table 2."
     )
-    parser.add_argument("experiments", nargs="*", default=[e.number for e in EXPERIMENTS], help="I, II, IV ... IX")
+    parser.add_argument(
+        "runs", nargs="*", default=names, choices=names, metavar="RUNS",
+        help=f"experiments I, II, IV ... IX and {FLOORS_RUNS} (chapter 08's runs over the three floors); default: all",
+    )  # fmt: skip
     args = parser.parse_args()
-    floor_runs()  # chapter 08's runs over the three floors
-    chosen = [experiment(number) for number in args.experiments]
-    for name, rows in reproduce_table2(experiments=chosen).items():
+    if FLOORS_RUNS in args.runs:
+        floor_runs()
+    chosen = [experiment(number) for number in args.runs if number != FLOORS_RUNS]
+    for name, rows in reproduce_table2(experiments=chosen).items() if chosen else ():
         print(name)
         print(HEADER)
         for row in rows:
