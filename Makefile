@@ -18,13 +18,13 @@ PHASE := .ci/phase
 
 env: $(STAMP)
 
-# --no-compile: Python compiles a module when it is first imported; compiling every installed module ahead (most are
+#: Python compiles a module when it is first imported; compiling every installed module ahead (most are
 # never imported) took half of the venv phase's time
 $(STAMP): environment.txt pyproject.toml
 	rm -rf $(VENV)
 	$(PHASE) venv sh -c '$(PYTHON) -m venv $(VENV) && \
-		$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-compile -r environment.txt && \
-		$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-compile --no-deps --no-build-isolation -e .'
+		$(BIN)/python -m pip install --quiet --disable-pip-version-check -r environment.txt && \
+		$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .'
 	touch $(STAMP)
 
 $(CHROMIUM):
