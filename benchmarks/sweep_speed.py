@@ -4,10 +4,11 @@
 
 24 runs of one recording (``--preset``, rendered on first use and cached): the KLT window (15, 21, 31 px) x the
 method (gpo, gpo-exact, gpo-rigid, fused) x the motion vector (median, mean). First one after another in this
-process, each exactly as a worker makes it (``gpo.batch.execute``); then as one ``gpo.batch.sweep`` on a local
-cluster of ``--workers`` processes (default one per core), into a new folder. Printed: both wall times and the
-speed-up (target at least 1.8 on 2 cores, the cluster's start not counted; its start is printed beside), the
-overhead per run (target under 5 % of a one-minute run) and whether every number of every run is the same both
+process, each exactly as a worker makes it (``gpo.batch.execute``), with OpenCV's own threads (as a loop in a
+notebook runs them) and again on one thread (as each worker runs); then as one ``gpo.batch.sweep`` on a local
+cluster of ``--workers`` processes (default one per core), into a new folder. Printed: the wall times and the
+speed-up (target at least 1.8 on 2 cores over the loop with OpenCV's threads, the cluster's start not counted; its
+start is printed beside, and the speed-up over the loop on one thread), the overhead per run (target under 5 % of a one-minute run) and whether every number of every run is the same both
 ways. The overhead per run is the sweep's wall time times its workers, less the time the runs themselves took on
 the workers (``run_seconds``), over the runs: scheduling, sending configs and results, hashing the recording,
 writing each run's files and the table. On a machine shared with other work the load average before and after and
@@ -49,14 +50,10 @@ def main() -> None:
     runs = [Run(bag, args.preset, overrides=dict(zip(GRID, v, strict=True))) for v in itertools.product(*GRID.values())]
     load_before = os.getloadavg()
 
-    started = time.perf_counter()
-    digest, version = recording_digest(bag), code_version()
-    sequential = {}
-    for run_ in runs:
-        config = configured(run_)
-        key = run_key(digest, config_to_dict(config), version)
-        sequential[key] = execute(run_, config, key).row | {"recording_sha256": digest}
-    sequential_s = time.perf_counter() - started
+    default_threads = cv2.getNumThreads()
+    sequential_s, sequential = _one_after_another(runs, default_threads)
+    one_thread_s, _ = _one_after_another(runs, 1)
+    cv2.setNumThreads(default_threads)
 
     started = time.perf_counter()
     with cluster_client(workers=args.workers) as client, tempfile.TemporaryDirectory() as out:
@@ -79,13 +76,15 @@ def main() -> None:
         "preset": args.preset,
         "workers": args.workers,
         "cores": os.cpu_count(),
-        "opencv_threads": cv2.getNumThreads(),
+        "opencv_threads": default_threads,
         "failed": int((table["status"] != "ok").sum()),
         "sequential_s": round(sequential_s, 2),
         "sweep_s": round(sweep_s, 2),
         "cluster_start_s": round(ready_s, 2),
         "speedup": round(sequential_s / sweep_s, 2),
         "speedup_with_cluster_start": round(sequential_s / (sweep_s + ready_s), 2),
+        "sequential_one_thread_s": round(one_thread_s, 2),
+        "speedup_over_one_thread": round(one_thread_s / sweep_s, 2),
         "mean_run_s_sequential": round(float(np.mean([r["run_seconds"] for r in sequential.values()])), 3),
         "mean_run_s_on_workers": round(float(table["run_seconds"].mean()), 3),
         "overhead_per_run_s": round(overhead_s, 3),
@@ -106,6 +105,20 @@ def main() -> None:
               f"{table.at[key, column]!r} in the sweep")
     if args.write:
         print(f"wrote {write_json(args.write, numbers)}")
+
+
+def _one_after_another(runs: list[Run], threads: int) -> tuple[float, dict[str, dict]]:
+    """The runs one after another in this process with OpenCV on ``threads`` threads, each exactly as a worker
+    makes it (``gpo.batch.execute``): the wall time, seconds, and each run's row by its key."""
+    cv2.setNumThreads(threads)
+    started = time.perf_counter()
+    digest, version = recording_digest(runs[0].recording), code_version()
+    rows = {}
+    for run_ in runs:
+        config = configured(run_)
+        key = run_key(digest, config_to_dict(config), version)
+        rows[key] = execute(run_, config, key).row | {"recording_sha256": digest}
+    return time.perf_counter() - started, rows
 
 
 def _autogroup() -> bool | None:
