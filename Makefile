@@ -18,8 +18,8 @@ PHASE := .ci/phase
 
 env: $(STAMP)
 
-# pip compiles what it installs; gpo's own modules are compiled once here (0.2 s): where PYTHONDONTWRITEBYTECODE is set, as in CI, every process of the
-# checks would otherwise compile them again when it imports them (about 0.3 s each)
+# pip compiles what it installs; gpo's own modules are compiled once here (0.2 s): where PYTHONDONTWRITEBYTECODE is
+# set, as in CI, every process of the checks would otherwise compile them again when it imports them (about 0.3 s)
 $(STAMP): environment.txt pyproject.toml
 	rm -rf $(VENV)
 	$(PHASE) venv sh -c '$(PYTHON) -m venv $(VENV) && \
