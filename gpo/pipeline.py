@@ -46,7 +46,17 @@ from gpo.config import FloorImageSection, read_config, rig_from_config, rig_to_d
 from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, Keypoints, degenerate, detect, refit
 from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
 from gpo.fusion import FilterDiverged, FusionSettings, TrackingMount, fuse
-from gpo.ground import FloorImage, RemapTable, analytic_table, ground_plane_image, ortho_rectify, pixels_to_floor
+from gpo.ground import (
+    FLOOR_METRES_PER_PIXEL,
+    FLOOR_X_RANGE_M,
+    FLOOR_Y_RANGE_M,
+    FloorImage,
+    RemapTable,
+    analytic_table,
+    ground_plane_image,
+    ortho_rectify,
+    pixels_to_floor,
+)
 from gpo.kinematics import (
     PaperBicycle,
     compose,
@@ -95,9 +105,6 @@ ROUTES = tuple(Route)
 VECTORS = ("median", "mean")
 RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
 DEFAULT_CONFIG = "sim_t265.yaml"
-# The floor image for odometry: 1 mm pixels track better than chapter 04's 0.5 mm (a floor point's error per track
-# 0.11 mm against 0.15 mm with a 21-pixel window: the window then spans twice the floor) and take a quarter of the time.
-ODOMETRY_METRES_PER_PIXEL = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -215,9 +222,9 @@ def save_config(path, config: OdometryConfig) -> Path:
 def _floor_image(section: FloorImageSection) -> FloorImage:
     try:
         return FloorImage.top_view(
-            section.x_range_m or (0.70, 0.90),
-            section.y_range_m or (-0.10, 0.10),
-            section.metres_per_pixel or ODOMETRY_METRES_PER_PIXEL,
+            section.x_range_m or FLOOR_X_RANGE_M,
+            section.y_range_m or FLOOR_Y_RANGE_M,
+            section.metres_per_pixel or FLOOR_METRES_PER_PIXEL,
         )
     except ValueError as error:
         raise ValueError(f"floor_image: {error}") from None

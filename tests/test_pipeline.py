@@ -4,6 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import yaml
 
 from gpo.__main__ import main
 from gpo.bag import BagWriter, Recording
@@ -149,6 +150,15 @@ def test_config_round_trip_and_the_default(tmp_path):
         load_config(tmp_path / "bad.yaml")
     with pytest.raises(ValueError, match="unknown method"):
         config.replace(method="magic")
+
+
+def test_a_config_without_a_floor_patch_gets_the_shipped_configs(tmp_path):
+    document = yaml.safe_load(save_config(tmp_path / "rig.yaml", load_config()).read_text())
+    document["floor_image"] = {"route": "analytic"}
+    (tmp_path / "bare.yaml").write_text(yaml.safe_dump(document))
+    bare, shipped = load_config(tmp_path / "bare.yaml").floor, load_config().floor
+    assert (bare.width, bare.height) == (shipped.width, shipped.height) == (200, 200)
+    np.testing.assert_array_equal(bare.affine, shipped.affine)
 
 
 def test_cli_run_writes_trajectory_and_summary_and_a_bag_with_the_estimate(sample, tmp_path, capsys):
