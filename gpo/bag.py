@@ -1,5 +1,8 @@
 """Recordings: read and write ROS1 and ROS2 bags as frames, trajectories, transforms and cameras.
 
+One module for both directions and all three formats (about 900 lines): the reader and the writer share the message
+types, the topic and frame conventions and the format detection, and the tests check them as one round trip.
+
 Formats
 -------
 ``ros1``

@@ -1,5 +1,9 @@
 """Intrinsic camera calibration from chessboard views: corner detection, then a least-squares fit.
 
+One module from corners to a calibration (about 880 lines): detection, the fits of every model and the result share
+the board's conventions, the rejected views and the uncertainty that ``CalibrationResult`` reports, and
+``python -m gpo calibrate`` is a thin command over them.
+
 Every model of ``gpo.camera`` is fitted (``MODELS``): the fisheye models EUCM (the T265 of the first
 paper), double sphere (ds), Kannala-Brandt (kb4) and Mei's unified model with radtan (omni) by our own
 least squares, and the pinhole with radial-tangential distortion by OpenCV's ``calibrateCamera``. All

@@ -1,5 +1,9 @@
 """Floor images from the fisheye: the ground plane image (GPI), its ortho-rectification, one remap table.
 
+One module for the three stages and the table that composes them (about 900 lines): they share ``FloorImage``,
+``RemapTable`` and its cache key, and the pipeline uses only the composed table; a module per stage would part the
+stages from the one table they must agree with.
+
 The first paper turns a fisheye frame into a top view of the floor in front of the robot in three stages
 (chapters 02-04), each a fixed per-pixel map:
 

@@ -1,5 +1,8 @@
 """A config in, a trajectory out: the one place where the stages meet.
 
+Long (about 730 lines) because all that joins the stages is here: the config read into stages, the odometer's step
+for every method and route, the run over a bag and its result; each stage itself lives in its own module.
+
 ``run(bag, config)`` streams a recording's camera frames through the floor image's one remap table
 (``gpo.ground``), the frame-to-frame floor flow (``gpo.flow``) and a motion estimator (``gpo.kinematics``), and
 integrates the pose of ``base_link`` in ``odom`` (the pose at the first frame is the origin). The estimators

@@ -1,6 +1,10 @@
 """How the simulated robot moves: motion plans with smooth speed profiles, their exact ground truth,
 and the drifting odometry a tracking camera (like an Intel RealSense T265) reports along them.
 
+One module for motion (about 1 100 lines): the segment kinds, the speed profile across their junctions, the plan
+that samples them, the tracking camera's drift along a plan and the named paths built from the segments change
+together (a new path most often needs a new segment kind or limit), and the recordings' cache key hashes them as one.
+
 This module is over 600 lines because it holds both the segment kinematics and the named paths every
 recording drives (the first paper's tests and the second paper's experiments I-IX).
 
