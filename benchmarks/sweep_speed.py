@@ -5,16 +5,16 @@
 24 runs of one recording (``--preset``, rendered on first use and cached): the KLT window (15, 21, 31 px) x the
 method (gpo, gpo-exact, gpo-rigid, fused) x the motion vector (median, mean). First one after another in this
 process, each exactly as a worker makes it (``gpo.batch.execute``), with OpenCV's own threads (as a loop in a
-notebook runs them) and again on one thread (as each worker runs); then as one ``gpo.batch.sweep`` on a local
-cluster of ``--workers`` processes (default one per core), into a new folder. Printed: the wall times and the
-speed-up (target at least 1.8 on 2 cores over the loop with OpenCV's threads, the cluster's start not counted; its
-start is printed beside, and the speed-up over the loop on one thread), the overhead per run (target under 5 % of a one-minute run) and whether every number of every run is the same both
-ways. The overhead per run is the sweep's wall time times its workers, less the time the runs themselves took on
-the workers (``run_seconds``), over the runs: scheduling, sending configs and results, hashing the recording,
-writing each run's files and the table. On a machine shared with other work the load average before and after and
-whether the kernel shares the CPU by session (autogroup) are printed so that the conditions are on record: under
-autogroup, with other sessions busy, this benchmark and its workers share one session's part of the CPU and the
-speed-up cannot show; measure it on an otherwise idle machine.
+notebook runs them) and again on one thread (as each worker runs); then as one ``gpo.batch.sweep`` on a local cluster
+of ``--workers`` processes (default one per core), into a new folder. Printed: the wall times and the speed-up
+(target at least 1.8 on 2 cores over the loop with OpenCV's threads, the cluster's start not counted; its start is
+printed beside, and the speed-up over the loop on one thread), the overhead per run (target under 5 % of a one-minute
+run) and whether every number of every run is the same both ways. The overhead per run is the sweep's wall time times
+its workers, less the time the runs themselves took on the workers (``run_seconds``), over the runs: scheduling,
+sending configs and results, hashing the recording, writing each run's files and the table. On a machine shared with
+other work the load average before and after and whether the kernel shares the CPU by session (autogroup) are printed
+so that the conditions are on record: under autogroup, with other sessions busy, this benchmark and its workers share
+one session's part of the CPU and the speed-up cannot show; measure it on an otherwise idle machine.
 """
 
 import argparse
