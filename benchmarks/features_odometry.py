@@ -1,32 +1,32 @@
 """The floor feature odometer (the second paper's) on the downward camera: accuracy and speed per configuration.
 
-    python benchmarks/features_odometry.py [--presets downward-long downward-wood ...] [--threads 1]
+    python benchmarks/features_odometry.py [--presets downward-long downward-wood ...] [--variants ...]
+                                           [--out DIR] [--scheduler tcp://HOST:PORT] [--workers N]
                                            [--write benchmarks/results/features_odometry.json]
 
-Each preset's recording is rendered on first use and cached. For each configuration the shipped config
-(``gpo/configs/sim_downward.yaml``: SIFT on the image scaled by 0.5, a 480 x 320 region of interest, 300 keypoints,
-both filters, the refit) is run by ``gpo.pipeline.run`` with only the named fields changed, and compared with the
-ground truth (``gpo.metrics``: final position error after placing the first pose on the truth's, heading RMSE).
-``--threads`` sets OpenCV's threads (1: one core, the speed target's terms); the rate is the whole run's, reading
-the bag included. Targets: on the high-texture ``downward-long`` (16.5 m) a final error at most 0.2 % of the
-distance and a heading RMSE at most 1.4 degrees; the default configuration at least 35 frames per second.
+Each preset's recording is rendered on first use (on the cluster, ``gpo.sim.population.render``) and cached. Each
+(preset, configuration) is one run of a sweep (``gpo.batch``, on a local Dask cluster or the one at
+``--scheduler``): the shipped config (``gpo/configs/sim_downward.yaml``: SIFT on the image scaled by 0.5, a
+480 x 320 region of interest, 300 keypoints, both filters, the refit) with only the named ``features`` fields
+changed, compared with the ground truth (``gpo.metrics``: final position error after placing the first pose on the
+truth's, heading RMSE); with ``--out`` the sweep's folder is kept and a second call reuses its runs. Every worker
+runs OpenCV on one thread (one core, the speed target's terms); the rate is the whole odometry's, reading the bag
+included, measured with the workers side by side (``--workers 1`` for a run with the machine to itself). Targets:
+on the high-texture ``downward-long`` (16.5 m) a final error at most 0.2 % of the distance and a heading RMSE at
+most 1.4 degrees; the default configuration at least 35 frames per second.
 """
 
 import argparse
-import dataclasses
-import math
+import json
+import tempfile
 from pathlib import Path
 
-import cv2
-
-from gpo.bag import Recording
-from gpo.metrics import evaluate, final_error
+from gpo.batch import Run, add_cluster_arguments, cluster_client, sweep
 from gpo.outputs import write_json
-from gpo.pipeline import load_config, run
-from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
+from gpo.sim.population import render
 
 CONFIG = Path(__file__).resolve().parents[1] / "gpo" / "configs" / "sim_downward.yaml"
-VARIANTS = {  # name -> the fields of FeatureParameters that differ from the shipped config's
+VARIANTS = {  # name -> the fields of the config's features section that differ from the shipped config's
     "default": {},
     "paper's fit (no refit)": {"refit_px": 0.0},
     "SIFT full image": {"scale": 1.0, "roi": None},
@@ -37,49 +37,66 @@ VARIANTS = {  # name -> the fields of FeatureParameters that differ from the shi
 TARGETS = {"final_error_percent": 0.2, "heading_rmse_deg": 1.4, "frames_per_second": 35.0}
 
 
-def measure(preset: str, variant: str) -> dict:
-    bag = recording(preset)
-    base = load_config(CONFIG)
-    config = base.replace(features=dataclasses.replace(base.features, **VARIANTS[variant]))
-    with Recording(bag) as recorded:
-        truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
-    result = run(bag, config, progress=False)
-    if result.error:
-        raise RuntimeError(f"{preset}, {variant}: the run stopped early {result.error}")
-    summary = result.summary()
-    error = final_error(result.trajectory, truth)
+def label(preset: str, variant: str) -> str:
+    """A run's name in the sweep's table: the variants of one recording differ only there and in their config."""
+    return f"{preset}: {variant}"
+
+
+def result_row(preset: str, variant: str, row) -> dict:
+    """A sweep's row in this benchmark's terms; a run that failed or stopped early is an error of the benchmark."""
+    if row["status"] != "ok":
+        raise RuntimeError(f"{preset}, {variant}: {row['status']}: {row['error']}")
     return {
         "preset": preset,
         "variant": variant,
-        "distance_m": round(error.distance_m, 3),
-        "final_error_mm": round(error.position_m * 1e3, 1),
-        "final_error_percent": round(error.percent, 3),
-        "heading_rmse_deg": round(evaluate(result.trajectory, truth).heading_rmse_deg, 3),
-        "final_heading_deg": round(math.degrees(error.heading_rad), 3),
-        "frames_flagged": summary["frames"] - summary["frames_measured"] - 1,
-        "flags": summary["flags"],
-        "frames_per_second": summary["frames_per_second"],
+        "distance_m": round(row["distance_m"], 3),
+        "final_error_mm": round(row["final_error_m"] * 1e3, 1),
+        "final_error_percent": round(row["final_error_percent"], 3),
+        "heading_rmse_deg": round(row["heading_rmse_deg"], 3),
+        "final_heading_deg": round(row["final_heading_deg"], 3),
+        "frames_flagged": int(row["frames"] - row["frames_measured"] - 1),
+        "flags": json.loads(row["flags"]),
+        "frames_per_second": round(row["frames_per_second"], 1),
     }
+
+
+def measure(presets: list[str], variants: list[str], out: Path, scheduler: str | None, workers: int | None) -> list:
+    """Every (preset, configuration) row, in that order."""
+    with cluster_client(scheduler, workers) as client:
+        bags = {name: path for (name, _), path in render(client, [(name, None) for name in presets]).items()}
+        runs = [
+            Run(
+                str(bags[preset]),
+                label(preset, variant),
+                config=str(CONFIG),
+                overrides={f"features.{name}": value for name, value in VARIANTS[variant].items()},
+            )
+            for preset in presets
+            for variant in variants
+        ]
+        table = sweep(runs, out, client).table
+    found = {row["recording"]: row for _, row in table.iterrows()}
+    return [
+        result_row(preset, variant, found[label(preset, variant)]) for preset in presets for variant in variants
+    ]
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--presets", nargs="+", default=["downward-long", "downward-wood", "downward-raised"])
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
-    parser.add_argument("--threads", type=int, default=1, help="OpenCV threads (default 1: one core)")
+    parser.add_argument("--out", type=Path, help="the sweep's folder, kept (default: a temporary one)")
+    add_cluster_arguments(parser)
     parser.add_argument("--write", type=Path, help="JSON file for the results")
     args = parser.parse_args()
-    cv2.setNumThreads(args.threads)
-    rows = []
+    with tempfile.TemporaryDirectory() as temporary:
+        rows = measure(args.presets, args.variants, args.out or Path(temporary), args.scheduler, args.workers)
     print(f"{'preset':16s} {'configuration':24s} {'distance':>9s} {'final error':>12s} {'%':>7s} {'heading rmse':>13s}"
           f" {'flagged':>8s} {'frames/s':>9s}")
-    for preset in args.presets:
-        for variant in args.variants:
-            row = measure(preset, variant)
-            rows.append(row)
-            print(f"{preset:16s} {variant:24s} {row['distance_m']:8.2f}m {row['final_error_mm']:10.1f}mm "
-                  f"{row['final_error_percent']:7.3f} {row['heading_rmse_deg']:11.3f}° {row['frames_flagged']:8d} "
-                  f"{row['frames_per_second']:9.1f}")
+    for row in rows:
+        print(f"{row['preset']:16s} {row['variant']:24s} {row['distance_m']:8.2f}m {row['final_error_mm']:10.1f}mm "
+              f"{row['final_error_percent']:7.3f} {row['heading_rmse_deg']:11.3f}° {row['frames_flagged']:8d} "
+              f"{row['frames_per_second']:9.1f}")
     print("targets (downward-long, default):", ", ".join(f"{k} {v}" for k, v in TARGETS.items()))
     if args.write:
         print(f"wrote {write_json(args.write, rows)}")

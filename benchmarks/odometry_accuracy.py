@@ -20,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 from gpo.bag import Recording
-from gpo.batch import Run, cluster_client, sweep
+from gpo.batch import Run, add_cluster_arguments, cluster_client, sweep
 from gpo.metrics import final_error
 from gpo.outputs import write_json
 from gpo.pipeline import METHODS, load_config, tracking_path
@@ -89,8 +89,7 @@ def main() -> None:
     parser.add_argument("--presets", nargs="+", default=["long1", "long2", "long3"], choices=sorted(PRESETS))
     parser.add_argument("--methods", nargs="+", default=list(TARGET_PERCENT), choices=CHOICES)
     parser.add_argument("--out", type=Path, help="the sweep's folder, kept (default: a temporary one)")
-    parser.add_argument("--scheduler", help="a Dask scheduler, tcp://HOST:PORT (default: a local cluster)")
-    parser.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    add_cluster_arguments(parser)
     parser.add_argument("--write", type=Path, help="JSON file for the results")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as temporary:

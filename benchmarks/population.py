@@ -36,7 +36,7 @@ import pandas as pd
 import yaml
 
 from gpo import cache
-from gpo.batch import Run, cluster_client, sweep
+from gpo.batch import Run, add_cluster_arguments, cluster_client, sweep
 from gpo.calibfiles import camera_to_kalibr
 from gpo.pipeline import load_config
 from gpo.sim.floors import FLOOR_KINDS
@@ -233,8 +233,7 @@ def main() -> int:
     parser.add_argument("--draws", type=int, default=30, help="worlds drawn (default 30: 15 of each kind of rig)")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--fused", action="store_true", help="also the fused method on the fisheye rigs")
-    parser.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
-    parser.add_argument("--scheduler", help="a running Dask scheduler, tcp://HOST:PORT")
+    add_cluster_arguments(parser)
     parser.add_argument("--out", type=Path, default=cache.folder("runs") / "population", help="the sweep's folder")
     parser.add_argument("--write", type=Path, help="JSON file for the results")
     args = parser.parse_args()

@@ -448,6 +448,14 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
         yield client
 
 
+def add_cluster_arguments(parser) -> None:
+    """``--scheduler`` and ``--workers`` on an ``argparse`` parser: the arguments of ``cluster_client``."""
+    parser.add_argument(
+        "--scheduler", help="a running Dask scheduler, tcp://HOST:PORT (default: DASK_SCHEDULER_ADDRESS, else local)"
+    )
+    parser.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+
+
 # ----------------------------------------------------------------------------------------------- the spec
 
 
