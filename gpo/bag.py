@@ -306,6 +306,12 @@ class Recording:
         connections = self._connections(topic, POSE_TYPES)
         return _trajectory([_pose(message) for message in self._messages(connections)], f"{self.path}, topic {topic}")
 
+    def pose_frames(self, topic: str) -> tuple[str, str]:
+        """(frame id, child frame id) of the first pose on ``topic``, as ``trajectory`` names them (PoseStamped
+        names no child frame: ``base_link``), without reading the other messages."""
+        _, frame_id, child_frame_id, _, _ = _pose(self._first_message(topic, POSE_TYPES))
+        return frame_id, "base_link" if child_frame_id is None else child_frame_id
+
     def transform(self, parent: str, child: str, topic: str = "/tf") -> Trajectory:
         """The dynamic transform ``parent`` -> ``child`` over time, from tf2_msgs/TFMessage on ``topic``.
 

@@ -228,7 +228,7 @@ def _fusion(recording: Recording, topics: dict, default: OdometryConfig):
     if not odometry:
         return default.fusion, "no tracking odometry (nav_msgs/Odometry) in the bag: --method fused cannot run"
     topic = default.fusion.tracking_topic if default.fusion.tracking_topic in odometry else odometry[0]
-    child = recording.trajectory(topic).child_frame_id
+    _, child = recording.pose_frames(topic)  # the first message: an 80 m bag holds 27 000
     settings = dataclasses.replace(default.fusion, tracking_topic=topic, tracking_frame=child)
     return settings, f"the bag: tracking odometry on {topic}, of {child} (--method fused uses it)"
 

@@ -297,6 +297,8 @@ def test_trajectory_round_trip(tmp_path, bag_format, msgtype):
         writer.add_trajectory("/odom", trajectory, msgtype=msgtype)
     with Recording(path) as recording:
         again = recording.trajectory("/odom")
+        frames = recording.pose_frames("/odom")
+    assert frames == (again.frame_id, again.child_frame_id)
     np.testing.assert_array_equal(again.stamps_ns, trajectory.stamps_ns)
     np.testing.assert_array_equal(again.positions, trajectory.positions)
     np.testing.assert_array_equal(again.quaternions, trajectory.quaternions)
@@ -309,6 +311,7 @@ def test_pose_stamped_names_no_child_frame(tmp_path):
         writer.add_trajectory("/pose", random_trajectory(child_frame_id="camera"), msgtype="pose")
     with Recording(path) as recording:
         assert recording.trajectory("/pose").child_frame_id == "base_link"
+        assert recording.pose_frames("/pose") == ("odom", "base_link")
 
 
 def test_odometry_twist_is_written_in_the_child_frame(tmp_path):
@@ -337,6 +340,7 @@ def test_transform_stamped_topic_reads_as_a_trajectory(tmp_path, bag_format):
             write("/vicon/robot", message, T0 + i)
     with Recording(path) as recording:
         trajectory = recording.trajectory("/vicon/robot")
+        assert recording.pose_frames("/vicon/robot") == ("world", "vicon/robot")
     assert (trajectory.frame_id, trajectory.child_frame_id) == ("world", "vicon/robot")
     np.testing.assert_array_equal(trajectory.positions[:, 0], [0.0, 1.0, 2.0])
 
