@@ -18,13 +18,16 @@ PHASE := .ci/phase
 
 env: $(STAMP)
 
-# pip compiles what it installs; gpo's own modules are compiled once here (0.2 s): where PYTHONDONTWRITEBYTECODE is
-# set, as in CI, every process of the checks would otherwise compile them again when it imports them (about 0.3 s)
+# uv (its pin in environment.txt) installs the pinned packages: 38 s from an empty download cache where pip took 1 min
+# 29 s with a full one, the same packages; everything is compiled once here (gpo's own modules in 0.2 s): where
+# PYTHONDONTWRITEBYTECODE is set, as in CI, every process of the checks would otherwise compile what it imports
+UV := $(BIN)/uv pip install --python $(BIN)/python --quiet
 $(STAMP): environment.txt pyproject.toml
 	rm -rf $(VENV)
 	$(PHASE) venv sh -c '$(PYTHON) -m venv $(VENV) && \
-		$(BIN)/python -m pip install --quiet --disable-pip-version-check -r environment.txt && \
-		$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . && \
+		$(BIN)/python -m pip install --quiet --disable-pip-version-check $$(grep "^uv==" environment.txt) && \
+		$(UV) --compile-bytecode -r environment.txt && \
+		$(UV) --no-deps --no-build-isolation -e . && \
 		$(BIN)/python -m compileall -q gpo'
 	touch $(STAMP)
 
