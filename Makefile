@@ -16,6 +16,10 @@ PHASE := .ci/phase
 
 .PHONY: test test-browser recordings tables demo lab book env clean
 
+# two jobs at a time: Chromium is installed (apt, mostly waiting on the network) while the venv is made and the
+# recordings render; the phases that need each other still wait for each other
+MAKEFLAGS += --jobs=2
+
 env: $(STAMP)
 
 # uv (its pin in environment.txt) installs the pinned packages: 38 s from an empty download cache where pip took 1 min
