@@ -174,6 +174,11 @@ def print_run(result: OdometryResult) -> None:
     print("frames: " + ", ".join(f"{summary[f'frames_{s}']} {s}" for s in ("measured", "coasted", "held", "skipped")))
     for reason, count in summary["flags"].items():
         print(f"  flagged {count}: {reason}")
+    if "frames_slower_layer" in summary:
+        print(
+            f"  {summary['frames_slower_layer']} measured frames held a slower layer of vectors (reflections on a "
+            "glossy floor?): their median is short"
+        )
     if result.interrupted:
         print(f"interrupted after {len(result.records)} frames; the frames before were kept", file=sys.stderr)
     elif result.error and result.error.startswith("after"):

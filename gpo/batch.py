@@ -29,7 +29,8 @@ config file, or ``default``), ``param.<dotted key>`` for each override, ``method
 reading stopped early, failed), ``error``; the metrics ``distance_m`` (travelled by the truth), ``final_error_m``,
 ``final_error_percent``, ``final_heading_deg``, ``ape_rmse_m``, ``rpe_mean_m`` (per ``RPE_DELTA_M`` metre),
 ``relative_error_percent``, ``heading_rmse_deg``; the frames ``frames``, ``frames_measured``, ``frames_coasted``,
-``frames_held``, ``frames_skipped``, ``flags`` (JSON: count of flagged frames by reason); ``frames_per_second``,
+``frames_held``, ``frames_skipped``, ``flags`` (JSON: count of flagged frames by reason), ``frames_slower_layer``
+(measured frames whose flow held a slower layer, ``gpo.flow``); ``frames_per_second``,
 ``seconds`` (the odometry's wall time), ``run_seconds`` (the whole run's on its worker: reading the truth, the
 odometry, the evaluation) and ``code_version``.
 """
@@ -213,6 +214,7 @@ def execute(run_: Run, config: OdometryConfig, key: str) -> Outcome:
         **{name: summary[name] for name in ("frames", "frames_measured", "frames_coasted", "frames_held")},
         "frames_skipped": summary["frames_skipped"],
         "flags": json.dumps(summary["flags"], sort_keys=True),
+        "frames_slower_layer": summary.get("frames_slower_layer", 0),
         "frames_per_second": result.frames_per_second,
         "seconds": result.seconds,
         "run_seconds": time.perf_counter() - started,

@@ -15,6 +15,14 @@ a wrong vector: no texture (a local contrast no higher than sensor noise), too f
 (a bad frame, motion blur), vectors that disagree (no consensus), or a change of motion near the pyramid's reach
 (too fast).
 
+A frame may hold a second, slower layer of vectors (``FlowQuality.slower``): on a glossy floor the reflection of
+the ceiling's lights lies as deep below the floor as the lights are above it, so as the camera (at height h)
+drives, the reflection of lights at height H moves through the floor image at h / (h + H) of the floor's speed,
+a few hundredths. On a screed whose own grain is fainter than those reflections they are much of the texture
+the corners find; they pull the median short and no check above fails. The frame is not flagged for them (the
+median is still the best estimate at hand); the run's summary counts such frames
+(``pipeline.OdometryResult.summary``).
+
 Each floor image is first flat-fielded and scaled to a common mean and contrast (exposure flicker and vignetting
 break Lucas-Kanade's constant brightness). Pixels (u, v): u right, v down, as OpenCV.
 """
@@ -30,6 +38,9 @@ MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution 
 GREY_MEAN, GREY_SPREAD = 128.0, 40.0  # every floor image is scaled to this mean and standard deviation
 CONTRAST_BOX_PX = 41  # the local mean for the texture measure when there is no flat field
 STATISTICS_STEP = 2  # image statistics are taken over every second row and column
+SLOWER_SPEED = 0.5  # a kept vector moving along the median at under this share of its length is in a slower layer
+SLOWER_MIN_PX = 2.0  # ... looked for once the median is this long (on a robot standing still nothing is slower)
+SLOWER_LAYER_SHARE = 0.1  # a frame with at least this share of its kept vectors in a slower layer holds one
 
 
 class FlowError(ValueError):
@@ -111,7 +122,9 @@ class FlowQuality:
 
     ``tracked``: tracks followed from the previous frame; ``kept``: those passing the forward-backward check;
     ``inliers``: kept vectors near the median; ``spread_px``: their robust standard deviation (1.4826 MAD),
-    pixels; ``flag``: None when the frame is measured, else why it is not.
+    pixels; ``flag``: None when the frame is measured, else why it is not; ``slower``: kept vectors moving along
+    the median at under ``SLOWER_SPEED`` of its length, once it is ``SLOWER_MIN_PX`` long (a slower layer, such
+    as reflections; see the module).
     """
 
     tracked: int
@@ -119,6 +132,7 @@ class FlowQuality:
     inliers: int
     spread_px: float
     flag: str | None = None
+    slower: int = 0
 
     @property
     def ok(self) -> bool:
@@ -127,6 +141,16 @@ class FlowQuality:
     @property
     def inlier_ratio(self) -> float:
         return self.inliers / self.kept if self.kept else 0.0
+
+    @property
+    def slower_layer(self) -> bool:
+        """Whether at least ``SLOWER_LAYER_SHARE`` of the kept vectors move in a slower layer."""
+        return slower_layer(self.slower, self.kept)
+
+
+def slower_layer(slower: int, kept: int) -> bool:
+    """Whether ``slower`` of ``kept`` vectors make a slower layer (at least ``SLOWER_LAYER_SHARE`` of them)."""
+    return kept > 0 and slower >= SLOWER_LAYER_SHARE * kept
 
 
 @dataclass(frozen=True, eq=False)
@@ -230,7 +254,7 @@ class FloorFlow:
         distance = np.hypot(*(vectors - median).T)
         spread = MAD_TO_SIGMA * float(np.median(distance))
         inlier = distance <= max(p.inlier_px, 3.0 * spread)
-        quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread)
+        quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=_slower(vectors, median))
         flag = None
         if quality.inlier_ratio < p.min_inlier_ratio:
             flag = f"no consensus: {quality.inliers} of {quality.kept} vectors near the median"
@@ -304,6 +328,15 @@ class FloorFlow:
         inside = (u >= 0) & (u < width) & (v >= 0) & (v < height)
         inside[inside] = self._detect_mask[v[inside], u[inside]] > 0
         return inside
+
+
+def _slower(vectors: np.ndarray, median: np.ndarray) -> int:
+    """How many ``vectors`` (N, 2) move along ``median`` (2,) at under ``SLOWER_SPEED`` of its length (0 while
+    it is shorter than ``SLOWER_MIN_PX``)."""
+    length = float(np.hypot(*median))
+    if length < SLOWER_MIN_PX:
+        return 0
+    return int(np.count_nonzero(vectors @ median < SLOWER_SPEED * length**2))
 
 
 def _flagged(start, end, tracked: int, flag: str, inlier=None, spread: float = float("nan")) -> FlowMeasurement:

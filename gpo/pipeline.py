@@ -47,7 +47,7 @@ from scipy.spatial.transform import Rotation
 from gpo.bag import Recording, StampWarning
 from gpo.config import FloorImageSection, read_config, rig_from_config, rig_to_dict
 from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, Keypoints, degenerate, detect, refit
-from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters
+from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters, slower_layer
 from gpo.fusion import FilterDiverged, FusionSettings, TrackingMount, fuse
 from gpo.ground import (
     FLOOR_METRES_PER_PIXEL,
@@ -293,8 +293,8 @@ class Unreadable:
 @dataclass(frozen=True)
 class FrameRecord:
     """One frame: header stamp (ns), base_link's ``pose`` (x, y, theta) in odom after it, the flow's counts
-    (tracked, kept, inliers, spread in pixels), ``status`` (measured, coasted, held, skipped, first) and the
-    ``flag`` saying why when not measured."""
+    (tracked, kept, inliers, spread in pixels), ``status`` (measured, coasted, held, skipped, first), the
+    ``flag`` saying why when not measured, and ``slower``: the kept vectors in a slower layer (``gpo.flow``)."""
 
     stamp_ns: int
     pose: tuple[float, float, float]
@@ -304,6 +304,7 @@ class FrameRecord:
     spread_px: float
     status: Status
     flag: str | None = None
+    slower: int = 0
 
     def __post_init__(self):
         object.__setattr__(self, "status", Status(self.status))  # a status given by its name, as a member
@@ -486,14 +487,15 @@ class FloorOdometer:
         return self.config.rig.mount.height / self.config.rig.camera.fx
 
     def _record(self, stamp_ns, measurement, status, flag=None) -> FrameRecord:
+        slower = 0
         if isinstance(measurement, FeatureMatches):
             counts = (len(measurement.pairs), int(measurement.kept.sum()), int(measurement.kept.sum()), math.nan)
         elif measurement is not None:
             quality = measurement.quality
-            counts = (quality.tracked, quality.kept, quality.inliers, quality.spread_px)
+            counts, slower = (quality.tracked, quality.kept, quality.inliers, quality.spread_px), quality.slower
         else:
             counts = (0, 0, 0, math.nan)
-        return FrameRecord(int(stamp_ns), tuple(float(v) for v in self.pose), *counts, status, flag)
+        return FrameRecord(int(stamp_ns), tuple(float(v) for v in self.pose), *counts, status, flag, slower)
 
 
 @dataclass(frozen=True)
@@ -555,8 +557,10 @@ class OdometryResult:
         return FloorRun(self.floor_trajectory, inliers, self.frames_per_second, spread)
 
     def summary(self) -> dict:
-        """Plain numbers for people and files: distance, frames by status, flags by reason, speed."""
+        """Plain numbers for people and files: distance, frames by status, flags by reason, speed, and (when any)
+        the frames whose flow held a slower layer (``gpo.flow``: reflections on a glossy floor)."""
         statuses = Counter(r.status for r in self.records)
+        slower = sum(slower_layer(r.slower, r.kept) for r in self.records)
         reasons = Counter(_reason(r.flag) for r in self.records if r.flag)
         unreadable = [f"{r.stamp_ns}: {r.flag}" for r in self.records if r.flag and r.flag.startswith("unreadable")]
         trajectory = self.trajectory
@@ -568,6 +572,7 @@ class OdometryResult:
             "frames": len(self.records),
             **{f"frames_{status}": statuses.get(status, 0) for status in Status if status is not Status.FIRST},
             "flags": dict(reasons.most_common()),
+            **({"frames_slower_layer": slower} if slower else {}),
             "distance_m": round(trajectory.path_length, 4),
             "duration_s": round(float(np.ptp(trajectory.times)), 3) if len(trajectory) else 0.0,
             "frames_per_second": round(self.frames_per_second, 1),

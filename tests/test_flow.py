@@ -62,6 +62,26 @@ def test_median_resists_outliers_that_pull_the_mean():
     assert measurement.quality.inliers < measurement.quality.kept
 
 
+def test_a_slower_layer_is_counted_and_a_single_one_is_not():
+    """A band over a fifth of the floor image moving at a tenth of the floor's speed, as the reflection of ceiling
+    lights on a glossy floor does: its kept vectors are the slower ones; a floor moving alone has none."""
+    image = _texture()
+    reflection = _texture(size=240, seed=2)[:, :50]
+    first, second = image.copy(), _moved(image, 0.0, 8.0)
+    first[:, 150:200] = reflection
+    second[:, 150:200] = _moved(reflection, 0.0, 0.8)
+    measurement = _track(first, second, max_corners=300, min_distance_px=5)
+    in_band = (measurement.start[:, 0] >= 150) & (measurement.start[:, 0] < 200)
+    assert measurement.quality.ok and in_band.sum() > 20
+    slow = measurement.vectors[:, 1] < 4.0
+    assert measurement.quality.slower == slow.sum()
+    assert np.count_nonzero(slow & ~in_band) <= 2  # the slower vectors are the band's (a track on its edge may err)
+    assert measurement.quality.slower_layer
+    for du, dv in ((0.0, 8.0), (0.3, -0.7)):  # one layer, moving; and too little motion to tell layers apart
+        alone = _track(image, _moved(image, du, dv)).quality
+        assert alone.slower == 0 and not alone.slower_layer
+
+
 def test_exposure_flicker_does_not_break_tracking():
     image = _texture()
     brighter = cv2.convertScaleAbs(_moved(image, 2.0, 6.0), alpha=1.12, beta=5)

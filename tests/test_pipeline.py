@@ -93,6 +93,7 @@ def test_duplicates_gaps_and_a_floor_without_texture_are_flagged_and_the_run_goe
     # three blank frames, and the one after them has nothing to start from
     assert summary["frames_coasted"] == 4
     assert summary["flags"] == {"no texture": 4, "stamp out of order": 1, "frame gap": 1}
+    assert "frames_slower_layer" not in summary  # the sample's wood floor has one layer
     # coasting over the blank frames (four frames, 6 cm of travel while speeding up) costs under a centimetre
     before_gap = result.trajectory
     position, _, _ = _final_error(
@@ -232,3 +233,16 @@ def test_a_runs_floor_run_is_what_the_filter_reads_of_its_frames():
     assert floor.inliers.tolist() == [0, 30, 0, 44]
     np.testing.assert_array_equal(floor.spread_px, [nan, 0.5, 1.25, 0.25])
     assert floor.frames_per_second == 2.0  # five frames read in 2.5 s
+
+
+def test_the_summary_counts_the_frames_whose_flow_held_a_slower_layer():
+    """A tenth or more of a frame's kept vectors in a slower layer (``gpo.flow.slower_layer``) counts the frame."""
+    nan = float("nan")
+    records = [
+        FrameRecord(0, (0.0, 0.0, 0.0), 0, 0, 0, nan, "first"),
+        FrameRecord(100_000_000, (0.01, 0.0, 0.0), 50, 40, 30, 0.5, "measured", None, 4),  # a tenth: counted
+        FrameRecord(200_000_000, (0.02, 0.0, 0.0), 50, 40, 30, 0.5, "measured", None, 3),  # under a tenth
+        FrameRecord(300_000_000, (0.03, 0.0, 0.0), 50, 40, 36, 0.5, "measured", None, 0),
+        FrameRecord(400_000_000, (0.04, 0.0, 0.0), 50, 10, 9, 0.5, "measured", None, 5),  # half: counted
+    ]
+    assert OdometryResult(records, 1.0, load_config(), "a.bag", "/camera").summary()["frames_slower_layer"] == 2
