@@ -11,9 +11,9 @@ locally one worker by default): the shipped config (``gpo/configs/sim_downward.y
 changed, compared with the ground truth (``gpo.metrics``: final position error after placing the first pose on the
 truth's, heading RMSE); with ``--out`` the sweep's folder is kept and a second call reuses its runs. Every worker
 runs OpenCV on one thread (one core, the speed target's terms); the rate is the whole odometry's, reading the bag
-included. Two workers finish the runs sooner but each reads fewer frames per second than one alone (in
-``benchmarks/sweep_speed.py`` two workers run 1.23 times as fast as one after another, not twice), hence the one
-worker. Targets: on the high-texture ``downward-long`` (16.5 m) a final error at most 0.2 % of the distance and a
+included. Two workers finish the runs sooner, but two processes share the cores' caches and the memory's
+bandwidth and each then reads a few per cent fewer frames per second than one alone: the one worker keeps the rate
+one core's. Targets: on the high-texture ``downward-long`` (16.5 m) a final error at most 0.2 % of the distance and a
 heading RMSE at most 1.4 degrees; the default configuration at least 35 frames per second.
 """
 

@@ -1,20 +1,25 @@
 """A sweep on a local Dask cluster against the same runs one after another: speed-up, per-run overhead, same results.
 
-    python benchmarks/sweep_speed.py [--preset test] [--workers N] [--write benchmarks/results/sweep_speed.json]
+    python benchmarks/sweep_speed.py [--preset test] [--workers N] [--repeats 5]
+        [--write benchmarks/results/sweep_speed.json]
 
 24 runs of one recording (``--preset``, rendered on first use and cached): the KLT window (15, 21, 31 px) x the
 method (gpo, gpo-exact, gpo-rigid, fused) x the motion vector (median, mean). First one after another in this
 process, each exactly as a worker makes it (``gpo.batch.execute``), with OpenCV's own threads (as a loop in a
-notebook runs them) and again on one thread (as each worker runs); then as one ``gpo.batch.sweep`` on a local cluster
-of ``--workers`` processes (default one per core), into a new folder. Printed: the wall times and the speed-up
+notebook runs them) and again on one thread (as each worker runs); then as one ``gpo.batch.sweep`` on a local
+cluster of ``--workers`` processes (default one per core), into a new folder. The three are measured ``--repeats``
+times, interleaved, on one cluster; the times printed are their medians. Printed: the wall times and the speed- up
 (target at least 1.8 on 2 cores over the loop with OpenCV's threads, the cluster's start not counted; its start is
-printed beside, and the speed-up over the loop on one thread), the overhead per run (target under 5 % of a one-minute
-run) and whether every number of every run is the same both ways. The overhead per run is the sweep's wall time times
-its workers, less the time the runs themselves took on the workers (``run_seconds``), over the runs: scheduling,
-sending configs and results, hashing the recording, writing each run's files and the table. On a machine shared with
-other work the load average before and after and whether the kernel shares the CPU by session (autogroup) are printed
-so that the conditions are on record: under autogroup, with other sessions busy, this benchmark and its workers share
-one session's part of the CPU and the speed-up cannot show; measure it on an otherwise idle machine.
+printed beside, and the speed-up over the loop on one thread), the bound on the speed-up (``speedup_bound``: the
+workers' count times the threaded loop's share of the one-thread loop's time, what single-threaded workers could
+reach with no cost at all, since the loop with OpenCV's threads already keeps every core busy part of the time), the
+overhead per run (target under 5 % of a one-minute run) and whether every number of every run is the same both ways.
+The overhead per run is the sweep's wall time times its workers, less the time the runs themselves took on the
+workers (``run_seconds``), over the runs: scheduling, sending configs and results, hashing the recording, writing
+each run's files and the table. On a machine shared with other work the load average before and after and whether
+the kernel shares the CPU by session (autogroup) are printed so that the conditions are on record: under autogroup,
+with other sessions busy, this benchmark and its workers share one session's part of the CPU and the speed-up cannot
+show; measure it on an otherwise idle machine.
 """
 
 import argparse
@@ -44,6 +49,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--preset", default="test", help="the recording (default: test, ~3 s)")
     parser.add_argument("--workers", type=int, default=os.cpu_count(), help="local workers (default: one per core)")
+    parser.add_argument("--repeats", type=int, default=5, help="times each way is measured (default 5; medians)")
     parser.add_argument("--write", type=Path, help="JSON file for the results")
     args = parser.parse_args()
     bag = str(recording(args.preset))
@@ -51,16 +57,20 @@ def main() -> None:
     load_before = os.getloadavg()
 
     default_threads = cv2.getNumThreads()
-    sequential_s, sequential = _one_after_another(runs, default_threads)
-    one_thread_s, _ = _one_after_another(runs, 1)
-    cv2.setNumThreads(default_threads)
-
     started = time.perf_counter()
-    with cluster_client(workers=args.workers) as client, tempfile.TemporaryDirectory() as out:
+    with cluster_client(workers=args.workers) as client:
         ready_s = time.perf_counter() - started
-        started = time.perf_counter()
-        result = sweep(runs, out, client, progress=False)
-        sweep_s = time.perf_counter() - started
+        times = {"sequential": [], "one_thread": [], "sweep": []}
+        for _ in range(args.repeats):  # interleaved, so that a change in the machine's load touches all three
+            elapsed, sequential = _one_after_another(runs, default_threads)
+            times["sequential"].append(elapsed)
+            times["one_thread"].append(_one_after_another(runs, 1)[0])
+            cv2.setNumThreads(default_threads)
+            with tempfile.TemporaryDirectory() as out:
+                started = time.perf_counter()
+                result = sweep(runs, out, client, progress=False)
+                times["sweep"].append(time.perf_counter() - started)
+    sequential_s, one_thread_s, sweep_s = (float(np.median(times[name])) for name in times)
     table = result.table.set_index("key")
     load_after = os.getloadavg()
 
@@ -77,6 +87,7 @@ def main() -> None:
         "workers": args.workers,
         "cores": os.cpu_count(),
         "opencv_threads": default_threads,
+        "repeats": args.repeats,
         "failed": int((table["status"] != "ok").sum()),
         "sequential_s": round(sequential_s, 2),
         "sweep_s": round(sweep_s, 2),
@@ -85,11 +96,13 @@ def main() -> None:
         "speedup_with_cluster_start": round(sequential_s / (sweep_s + ready_s), 2),
         "sequential_one_thread_s": round(one_thread_s, 2),
         "speedup_over_one_thread": round(one_thread_s / sweep_s, 2),
+        "speedup_bound": round(args.workers * sequential_s / one_thread_s, 2),
         "mean_run_s_sequential": round(float(np.mean([r["run_seconds"] for r in sequential.values()])), 3),
         "mean_run_s_on_workers": round(float(table["run_seconds"].mean()), 3),
         "overhead_per_run_s": round(overhead_s, 3),
         "overhead_percent_of_a_minute": round(100 * overhead_s / 60, 2),
         "identical_results": not mismatched,
+        "speedups_each_repeat": [round(a / b, 2) for a, b in zip(times["sequential"], times["sweep"], strict=True)],
         "load_average_before": [round(v, 1) for v in load_before],
         "load_average_after": [round(v, 1) for v in load_after],
         "autogroup_scheduling": _autogroup(),

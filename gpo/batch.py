@@ -18,10 +18,11 @@ config the schema refuses, an unreadable bag, a recording without the truth topi
 ``failed`` and its ``error`` and the sweep goes on. A worker lost mid-run is replaced by Dask, which runs the
 task again elsewhere (``distributed.scheduler.allowed-failures`` times).
 
-The cluster (``cluster_client``): a ``LocalCluster`` of one single-threaded worker process per core by default;
-with a scheduler address (``tcp://HOST:PORT``, or ``DASK_SCHEDULER_ADDRESS``) an existing cluster. The workers
-open the recordings by the paths the runs name, so on a cluster those paths (and ``GPO_CACHE_DIR`` for the
-simulated presets) must lie on storage every worker sees under the same path, such as a shared network folder.
+The cluster (``cluster_client``): a ``LocalCluster`` of one single-threaded worker process per core by default,
+started without Dask's ``MALLOC_TRIM_THRESHOLD_`` (``WORKER_ENVIRONMENT_UNSET``); with a scheduler address
+(``tcp://HOST:PORT``, or ``DASK_SCHEDULER_ADDRESS``) an existing cluster. The workers open the recordings by the
+paths the runs name, so on a cluster those paths (and ``GPO_CACHE_DIR`` for the simulated presets) must lie on
+storage every worker sees under the same path, such as a shared network folder.
 Results travel back to the client, which alone writes ``out``.
 
 Table columns: ``key``, ``recording`` (a label), ``recording_path``, ``recording_sha256``, ``config`` (the base
@@ -54,6 +55,7 @@ from pathlib import Path
 from typing import Any
 
 import cv2
+import dask
 import numpy as np
 import pandas as pd
 import yaml
@@ -72,6 +74,12 @@ FINISHED = ("ok", "partial")  # statuses a sweep started again does not repeat
 TABLE_EVERY_S = 10.0  # while a sweep runs its table is rewritten at most this often (each run's row.json at once)
 CONNECT_TIMEOUT_S = 20  # the longest wait for a scheduler given by its address
 PRESENTATION_MODULES = ("__main__.py",)  # not part of the code version
+# Dask's nannies start workers with MALLOC_TRIM_THRESHOLD_=65536 (distributed.nanny.pre-spawn-environ), which turns
+# off glibc's adaptive mmap threshold: every image-sized array is then mapped and unmapped afresh. In
+# benchmarks/sweep_speed.py a run on a worker took 0.58 s with it, against 0.39 s one after another on one thread,
+# and 0.22 s against 0.24 s without it. A run keeps no memory between tasks that trimming would give back, so the
+# local cluster's workers start without it.
+WORKER_ENVIRONMENT_UNSET = ("MALLOC_TRIM_THRESHOLD_",)
 
 
 # ----------------------------------------------------------------------------------------------- runs
@@ -430,7 +438,12 @@ def summary_text(table: pd.DataFrame, speed: bool = True) -> str:
 def cluster_client(scheduler: str | None = None, workers: int | None = None) -> Iterator:
     """A Dask client: of the scheduler at ``scheduler`` (``tcp://HOST:PORT``), else at ``DASK_SCHEDULER_ADDRESS``,
     else of a new local cluster of ``workers`` single-threaded worker processes (default: one per core), closed on
-    leaving. Raises ValueError naming the address of a scheduler that does not answer within ``CONNECT_TIMEOUT_S``."""
+    leaving. Raises ValueError naming the address of a scheduler that does not answer within ``CONNECT_TIMEOUT_S``.
+
+    The local workers start without ``WORKER_ENVIRONMENT_UNSET``. Workers of a cluster given by its address keep
+    their own environment: started by ``dask worker`` they run the odometry up to 1.8x slower unless started with
+    ``--no-nanny`` or with a Dask config file that sets ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_``
+    to ``null``."""
     address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
     if address:
         try:
@@ -441,7 +454,9 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
             yield client
         return
     workers = workers or os.cpu_count() or 1
+    unset = {f"distributed.nanny.pre-spawn-environ.{name}": None for name in WORKER_ENVIRONMENT_UNSET}
     with (
+        dask.config.set(unset),
         LocalCluster(
             n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
         ) as cluster,

@@ -18,6 +18,7 @@ import gpo
 from gpo.__main__ import main
 from gpo.bag import BagWriter, Recording
 from gpo.batch import (
+    WORKER_ENVIRONMENT_UNSET,
     Run,
     SweepSpec,
     cluster_client,
@@ -158,6 +159,8 @@ def test_sweep_on_a_local_cluster_keeps_failures_and_resumes(bags, tmp_path):
     out = tmp_path / "results"
     with cluster_client(workers=2) as client:
         assert len(client.scheduler_info()["workers"]) == 2
+        # glibc's adaptive mmap threshold stays on (Dask's nanny would set MALLOC_TRIM_THRESHOLD_ and slow runs 1.8x)
+        assert set(client.run(lambda: WORKER_ENVIRONMENT_UNSET[0] in os.environ).values()) == {False}
         first = sweep(good[:2], out, client, progress=False)
         assert len(first.executed) == 2 and first.reused == []
         second = sweep(good + failing, out, client, progress=False)
