@@ -10,10 +10,16 @@ A file's name ends in its ``key``: the first 16 hex digits of the sha256 of ever
 canonical JSON, and of the source files that make it, so that a changed input or a changed program makes a new
 file instead of reading a stale one. ``write`` makes a file under a name of its own (the process id) and renames it
 into place, so processes sharing the folder never read one another's half-written files.
+
+A changed program leaves the files of the old one behind (a full set of recordings is about 6 GB), so the cache is
+kept within ``MAX_BYTES``: after each ``write``, the oldest files of the kinds that can be made again
+(``EVICTED_KINDS``; downloads stay) are deleted until it fits. A file still in use but old is made again when next
+wanted.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -25,6 +31,8 @@ import pooch
 
 ENVIRONMENT_VARIABLE = "GPO_CACHE_DIR"
 KINDS = ("tables", "recordings", "runs", "datasets")
+MAX_BYTES = 30 * 2**30  # beyond this the oldest files that can be made again go, 5 full sets of recordings
+EVICTED_KINDS = ("tables", "recordings", "runs")
 
 
 def root() -> Path:
@@ -69,7 +77,41 @@ def write(target: Path, save: Callable[[Path], object]) -> Path:
         _remove(partial)
     else:
         partial.rename(target)
+    evict(keep=target)
     return target
+
+
+def evict(keep: Path | None = None, max_bytes: int | None = None) -> list[Path]:
+    """Delete the oldest (by modification time) files and folders of ``EVICTED_KINDS`` until the cache holds at
+    most ``max_bytes`` (default ``MAX_BYTES``) in them; never ``keep``, nor another process's partial file. Returns
+    what was deleted, oldest first."""
+    limit = MAX_BYTES if max_bytes is None else max_bytes
+    entries = []
+    for kind in EVICTED_KINDS:
+        for entry in folder(kind).glob("*") if folder(kind).is_dir() else ():
+            if "-partial-" in entry.name or entry == keep:
+                continue
+            try:
+                entries.append((entry.stat().st_mtime, _size(entry), entry))
+            except OSError:  # removed by another process meanwhile
+                continue
+    total = sum(size for _, size, _ in entries) + (_size(keep) if keep is not None and keep.exists() else 0)
+    deleted = []
+    for _, size, entry in sorted(entries, key=lambda item: item[0]):
+        if total <= limit:
+            break
+        with contextlib.suppress(OSError):  # another process removed it first
+            _remove(entry)
+        total -= size
+        deleted.append(entry)
+    return deleted
+
+
+def _size(path: Path) -> int:
+    """Bytes of the file, or of every file below the folder, ``path``."""
+    if path.is_dir():
+        return sum(item.stat().st_size for item in path.rglob("*") if item.is_file())
+    return path.stat().st_size
 
 
 def _remove(path: Path) -> None:

@@ -2,6 +2,7 @@
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -83,3 +84,27 @@ def test_tables_and_downloads_live_under_the_one_variable(tmp_path, monkeypatch)
     assert datasets.data_dir() == tmp_path / "datasets"
     monkeypatch.setenv("GPO_DATA_DIR", str(tmp_path / "copies"))  # the real-data folder stays a folder of its own
     assert datasets.data_dir() == tmp_path / "copies"
+
+
+def test_the_oldest_files_that_can_be_made_again_go_when_the_cache_is_full(tmp_path, monkeypatch):
+    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(cache, "MAX_BYTES", 3500)
+    made = {}
+    for age, (kind, name) in enumerate([("recordings", "old"), ("datasets", "download"), ("tables", "older-code"),
+                                        ("recordings", "bag2"), ("runs", "run")]):
+        path = cache.path(kind, name, "0123456789abcdef", ".bin")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(b"x" * 1000)
+        os.utime(path, (1e9 + age, 1e9 + age))  # made in this order
+        made[name] = path
+    folder_bag = cache.path("recordings", "ros2", "0123456789abcdef")  # a ROS 2 bag is a folder
+    folder_bag.mkdir()
+    (folder_bag / "data.mcap").write_bytes(b"x" * 500)
+    os.utime(folder_bag, (1e9 + 10, 1e9 + 10))
+    new = cache.write(cache.path("recordings", "new", "fedcba9876543210", ".bin"), lambda p: p.write_bytes(b"y" * 1000))
+    # 4500 bytes that can be made again beside the new 1000 (the download does not count): the two oldest go
+    assert not made["old"].exists() and not made["older-code"].exists()
+    assert made["download"].exists() and made["bag2"].exists() and made["run"].exists() and folder_bag.exists()
+    assert new.read_bytes() == b"y" * 1000
+    assert cache.evict(max_bytes=0) == [made["bag2"], made["run"], folder_bag, new]  # oldest first, keep aside
+    assert cache.evict(keep=None, max_bytes=0) == [] and made["download"].exists()
