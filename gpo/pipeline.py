@@ -13,8 +13,9 @@ integrates the pose of ``base_link`` in ``odom`` (the pose at the first frame is
   The vector is the motion of the floor where the tracks are, and tracks drift towards the robot between
   re-detections, so the wheel is placed at the tracks' median each frame (about L; l_r keeps its ratio to L).
   Left at the fixed L, every turn read 5 % short on the ``long1`` path;
-- ``gpo-exact``: the same vector turned into the exact circular arc of a rigid robot that does not slide at its
-  rear axle (reverse driving and turning on the spot included);
+- ``gpo-exact``: the same vector, of the floor's own tracks (on a glossy floor not its reflections':
+  ``gpo.flow.floor_layer``), turned into the exact circular arc of a rigid robot that does not slide at its rear
+  axle (reverse driving and turning on the spot included);
 - ``gpo-rigid``: no kinematic model: the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
   frame's increment;
 - ``fused``: one of those (``FusionSettings.floor_method``) and the tracking camera's own odometry from the same
@@ -47,7 +48,7 @@ from scipy.spatial.transform import Rotation
 from gpo.bag import Recording, StampWarning
 from gpo.config import FloorImageSection, read_config, rig_from_config, rig_to_dict
 from gpo.features import FeatureMatches, FeatureParameters, FeatureTracker, Keypoints, degenerate, detect, refit
-from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters, slower_layer
+from gpo.flow import FloorFlow, FlowMeasurement, KLTParameters, floor_layer, slower_layer
 from gpo.fusion import FilterDiverged, FusionSettings, TrackingMount, fuse
 from gpo.ground import (
     FLOOR_METRES_PER_PIXEL,
@@ -334,6 +335,7 @@ class FloorOdometer:
         self._estimate = estimators[config.method]  # (measurement, dt) -> (the frame's increment or None, why)
         affine = config.floor.affine
         self._to_metres = affine[:, :2].T.copy(), affine[:, 2].copy()
+        self._nadir_px = np.linalg.solve(affine[:, :2], config.rig.mount.position[:2] - affine[:, 2])
         self.pose = np.zeros(3)
         self._stamp_ns: int | None = None
         self._measured_ns: int | None = None
@@ -419,11 +421,14 @@ class FloorOdometer:
         matrix, offset = self._to_metres
         return uv @ matrix + offset
 
-    def _vector_motion(self, measurement: FlowMeasurement) -> tuple[np.ndarray, np.ndarray]:
-        """The floor point the vector statistic measures (the tracks' median start) and its displacement, both
-        in base_link, metres."""
-        vector = measurement.median if self.config.vector == "median" else measurement.mean
-        return self._metres(np.median(measurement.start, axis=0)), self._to_metres[0].T @ vector
+    def _vector_motion(self, measurement: FlowMeasurement, tracks: np.ndarray | None = None):
+        """The floor point the vector statistic measures (the median start of the kept tracks, or of those the mask
+        ``tracks`` picks) and its displacement, both in base_link, metres."""
+        starts, vectors = measurement.start, measurement.vectors
+        if tracks is not None:
+            starts, vectors = starts[tracks], vectors[tracks]
+        statistic = np.median if self.config.vector == "median" else np.mean
+        return self._metres(np.median(starts, axis=0)), self._to_metres[0].T @ statistic(vectors, axis=0)
 
     def _paper_increment(self, measurement: FlowMeasurement, dt: float):
         """``gpo``: the paper's bicycle model on the vector, its virtual wheel at the measured point."""
@@ -431,8 +436,9 @@ class FloorOdometer:
         return self._virtual_wheel_at(where[0]).step(np.zeros(3), -moved, dt), None  # from the origin
 
     def _exact_increment(self, measurement: FlowMeasurement, dt: float):
-        """``gpo-exact``: the exact arc that moves the measured point by the vector."""
-        where, moved = self._vector_motion(measurement)
+        """``gpo-exact``: the exact arc that moves the measured point by the vector of the floor's own tracks, not
+        a reflection's (``gpo.flow.floor_layer``)."""
+        where, moved = self._vector_motion(measurement, floor_layer(measurement.start, measurement.end, self._nadir_px))
         return increment_from_point_motion(where, where + moved), None
 
     def _rigid_step(self, measurement: FlowMeasurement, dt: float):

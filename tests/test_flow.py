@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from gpo.flow import FloorFlow, FlowError, KLTParameters
+from gpo.flow import LAYER_MIN_TRACKS, FloorFlow, FlowError, KLTParameters, floor_layer
 from gpo.kinematics import increment_from_point_pairs
 
 
@@ -162,3 +162,46 @@ def test_losing_most_tracks_is_flagged_even_when_enough_remain():
     measurement = _track(image, second, max_corners=300, min_distance_px=5)
     assert measurement.quality.flag.startswith("too few tracks kept")
     assert measurement.quality.kept >= 12
+
+
+def two_layers(floor: int, reflections: int, turn_deg: float, shift_px, mirror_share: float, seed: int = 0):
+    """Tracks of a floor and of the reflections in it over one frame, as ``gpo.flow.floor_layer`` describes them:
+    both turn by ``turn_deg`` about the nadir (100, 60); the floor then moves by ``shift_px``, the reflections by
+    ``mirror_share`` of it; 0.1 px of tracking noise. Returns start, end (N, 2), the nadir and the floor's mask."""
+    rng = np.random.default_rng(seed)
+    nadir = np.array([100.0, 60.0])
+    start = rng.uniform([0, 0], [400, 300], (floor + reflections, 2))
+    angle = np.radians(turn_deg)
+    rotation = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    is_floor = np.arange(floor + reflections) < floor
+    shift = np.where(is_floor[:, None], 1.0, mirror_share) * np.asarray(shift_px, float)
+    end = nadir + (start - nadir) @ rotation.T + shift + rng.normal(0, 0.1, start.shape)
+    return start.astype(np.float32), end.astype(np.float32), nadir, is_floor
+
+
+@pytest.mark.parametrize("floor, reflections", [(20, 60), (40, 40), (60, 20)])
+@pytest.mark.parametrize("turn_deg, shift_px", [(0.0, (9.0, 0.0)), (2.5, (-6.0, 1.5)), (-4.0, (0.0, -5.0))])
+def test_floor_layer_keeps_the_floor_and_drops_its_reflections(floor, reflections, turn_deg, shift_px):
+    start, end, nadir, is_floor = two_layers(floor, reflections, turn_deg, shift_px, mirror_share=0.06)
+    np.testing.assert_array_equal(floor_layer(start, end, nadir), is_floor)  # the floor a minority or not
+
+
+def test_floor_layer_keeps_every_track_of_one_layer_or_of_too_few():
+    start, end, nadir, _ = two_layers(50, 0, 3.0, (7.0, 2.0), mirror_share=0.06)
+    assert floor_layer(start, end, nadir).all()
+    start, end, nadir, _ = two_layers(2, LAYER_MIN_TRACKS - 3, 0.0, (8.0, 0.0), mirror_share=0.06)
+    assert floor_layer(start, end, nadir).all()  # too few tracks to tell a layer: every track, as the median takes
+    standing = floor_layer(start, start + np.float32(0.05), nadir)
+    assert standing.all()  # standing still: one layer
+
+
+def test_floor_layer_is_not_fooled_by_a_thing_moving_over_the_floor():
+    """A sheet dragged across the floor moves farther than the floor, but another way: the floor stays, and with
+    reflections under the floor's tracks the floor alone is kept (the sheet and the reflections dropped)."""
+    start, end, nadir, _ = two_layers(60, 0, 0.0, (0.0, 3.0), mirror_share=0.06)
+    sheet_start, sheet_end, _, _ = two_layers(10, 0, 0.0, (-8.0, -2.0), mirror_share=0.06, seed=1)
+    both = floor_layer(np.vstack([start, sheet_start]), np.vstack([end, sheet_end]), nadir)
+    assert both.all()  # no reflections: every track, as the median takes them (it holds the floor's)
+    start, end, nadir, is_floor = two_layers(40, 40, 1.5, (0.0, 6.0), mirror_share=0.06)
+    mask = floor_layer(np.vstack([start, sheet_start]), np.vstack([end, sheet_end]), nadir)
+    np.testing.assert_array_equal(mask, np.concatenate([is_floor, np.zeros(10, bool)]))
