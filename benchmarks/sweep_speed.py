@@ -8,7 +8,7 @@ method (gpo, gpo-exact, gpo-rigid, fused) x the motion vector (median, mean). Fi
 process, each exactly as a worker makes it (``gpo.batch.execute``), with OpenCV's own threads (as a loop in a
 notebook runs them) and again on one thread (as each worker runs); then as one ``gpo.batch.sweep`` on a local
 cluster of ``--workers`` processes (default one per core), into a new folder. The three are measured ``--repeats``
-times, interleaved, on one cluster; the times printed are their medians. Printed: the wall times and the speed- up
+times, interleaved, on one cluster; the times printed are their medians. Printed: the wall times and the speed-up
 (target at least 1.8 on 2 cores over the loop with OpenCV's threads, the cluster's start not counted; its start is
 printed beside, and the speed-up over the loop on one thread), the bound on the speed-up (``speedup_bound``: the
 workers' count times the threaded loop's share of the one-thread loop's time, what single-threaded workers could

@@ -370,9 +370,12 @@ def floor_layer(start: np.ndarray, end: np.ndarray, nadir: np.ndarray) -> np.nda
     moved = end - nadir - (start - nadir) @ rotation.T  # each track's displacement once the rotation is out
     blend = np.median(moved, axis=0)
     near = np.linalg.norm(moved[:, None] - moved[None], axis=2) < LAYER_RADIUS_PX
+    tried = set()  # the groups already judged: on a tight floor most tracks have the very same neighbours
     for seed in np.argsort(-np.linalg.norm(moved, axis=1)):  # the farthest-moving tracks first
-        if near[seed].sum() < LAYER_MIN_TRACKS:
+        group = np.packbits(near[seed]).tobytes()
+        if near[seed].sum() < LAYER_MIN_TRACKS or group in tried:
             continue
+        tried.add(group)
         centre = np.median(moved[near[seed]], axis=0)
         length = float(np.hypot(*centre))
         if length < SLOWER_MIN_PX:
