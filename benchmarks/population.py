@@ -1,7 +1,8 @@
 """Every method over a population of drawn worlds, not one tuned world: its final-error distribution and its failures.
 
-    python benchmarks/population.py [--draws 30] [--first-seed 0] [--fused] [--workers N] [--scheduler ADDRESS]
-                                    [--out SWEEP_FOLDER] [--write benchmarks/results/population.json]
+    python benchmarks/population.py [--draws 30] [--first-seed 0] [--fused] [--matte] [--workers N]
+                                    [--scheduler ADDRESS] [--out SWEEP_FOLDER]
+                                    [--write benchmarks/results/population.json]
 
 ``--draws`` worlds (seeds ``--first-seed`` on, ``gpo.sim.population.draw``: half fisheye rigs of the T265's
 family at any height 0.08-0.30 m, pitch 0-15 degrees, roll +-2 degrees and lever 0.3-0.9 m, with a drifting
@@ -25,6 +26,10 @@ draw and what the run's summary says of it: frames coasted, held and skipped, th
 frames whose flow held a slower layer of vectors (``gpo.flow``: the reflections of a glossy floor, which pull the
 median short without failing any check); for ``gpo``, whether the path holds a leg the paper's bicycle reads wrong
 (reverse driving read as forward, a spin's sense flipping: ``gpo.kinematics``, chapter 06).
+
+``--matte`` runs the same draws with every floor matte (``gpo.sim.population.matte``: the same rigs, paths, drifts
+and textures, without the glossy screed's reflections of the ceiling lamps), so that what the reflections cost each
+method is the difference between the two reports (``--write benchmarks/results/population_matte.json``).
 """
 
 import argparse
@@ -43,7 +48,7 @@ from gpo.batch import Run, add_cluster_arguments, cluster_client, sweep
 from gpo.calibfiles import camera_to_kalibr
 from gpo.pipeline import load_config
 from gpo.sim.floors import FLOOR_KINDS
-from gpo.sim.population import Draw, draw, render_draws
+from gpo.sim.population import Draw, draw, matte, render_draws
 
 CONFIGS = Path(__file__).resolve().parents[1] / "gpo" / "configs"
 CONFIG = {"fisheye": CONFIGS / "sim_t265.yaml", "downward": CONFIGS / "sim_downward.yaml"}
@@ -248,7 +253,9 @@ def main() -> int:
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--fused", action="store_true", help="also the fused method on the fisheye rigs")
     add_cluster_arguments(parser)
-    parser.add_argument("--out", type=Path, default=cache.folder("runs") / "population", help="the sweep's folder")
+    parser.add_argument("--matte", action="store_true", help="the same draws with every floor matte (no sheen)")
+    parser.add_argument("--out", type=Path, help="the sweep's folder (default: population or population-matte in "
+                        "the cache's runs)")
     parser.add_argument("--write", type=Path, help="JSON file for the results")
     args = parser.parse_args()
     if args.draws < 1 or args.first_seed < 0:
@@ -256,21 +263,24 @@ def main() -> int:
     if args.write is not None and args.write.is_dir():
         parser.error(f"--write {args.write} is a folder; expected a JSON file's path")
     draws = [draw(seed) for seed in range(args.first_seed, args.first_seed + args.draws)]
+    if args.matte:
+        draws = [matte(chosen) for chosen in draws]
+    out = args.out or cache.folder("runs") / ("population-matte" if args.matte else "population")
     started = time.perf_counter()
     with cluster_client(args.scheduler, args.workers) as client:
         workers = len(client.scheduler_info()["workers"])
         bags = render_draws(client, draws)
         rendered = time.perf_counter()
         runs = runs_of(draws, bags, args.fused)
-        swept = sweep(runs, args.out, client, progress=sys.stderr.isatty())
+        swept = sweep(runs, out, client, progress=sys.stderr.isatty())
     finished = time.perf_counter()
     keys = set(swept.executed) | set(swept.reused)
     table = swept.table[swept.table["key"].isin(keys)]
-    result = report(table, draws, args.out)
+    result = report(table, draws, out)
     print_report(result)
     print(
         f"\n{len(draws)} draws rendered (or read from the cache) in {rendered - started:.0f} s, {len(runs)} runs "
-        f"in {finished - rendered:.0f} s on {workers} workers; sweep folder {args.out}"
+        f"in {finished - rendered:.0f} s on {workers} workers; sweep folder {out}"
     )
     if args.write:
         document = {

@@ -11,9 +11,9 @@ The kept tracks' vectors give the frame's **median** motion vector, robust to th
 and highlights make, and the mean, for the first paper's comparison (its Table 3).
 
 Each frame gets a ``FlowQuality``; a frame that cannot be measured is flagged with the reason, never turned into
-a wrong vector: no texture (a local contrast no higher than sensor noise), too few corners, too few tracks kept
-(a bad frame, motion blur), vectors that disagree (no consensus), or a change of motion near the pyramid's reach
-(too fast).
+a wrong vector: no texture (no local contrast beyond the sensor's noise, ``floor_texture``), too few corners, too
+few tracks kept (a bad frame, motion blur), vectors that disagree (no consensus), or a change of motion near the
+pyramid's reach (too fast).
 
 A frame may hold a second, slower layer of vectors (``FlowQuality.slower``): on a glossy floor the reflection of
 the ceiling's lights lies as deep below the floor as the lights are above it, so as the camera (at height h)
@@ -38,6 +38,7 @@ import numpy as np
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
 GREY_MEAN, GREY_SPREAD = 128.0, 40.0  # every floor image is scaled to this mean and standard deviation
 CONTRAST_BOX_PX = 41  # the local mean for the texture measure when there is no flat field
+TEXTURE_LAG_PX = 3  # the texture measure compares the floor image with itself this far away (see floor_texture)
 STATISTICS_STEP = 2  # image statistics are taken over every second row and column
 SLOWER_SPEED = 0.5  # a kept vector moving along the median at under this share of its length is in a slower layer
 SLOWER_MIN_PX = 2.0  # ... looked for once the median is this long (on a robot standing still nothing is slower)
@@ -65,8 +66,8 @@ class KLTParameters:
     it if they are wider; fewer than ``min_inlier_ratio`` of the kept vectors inliers flags the frame (no
     consensus). Two groups of tracks of about equal size (the floor and something moving by itself) widen the
     spread until every vector counts: the median then lies between them and nothing flags it.
-    ``min_texture_grey``: a floor image whose local contrast (the standard deviation of the image minus its
-    local mean, grey levels) is lower holds nothing but noise to track, and the frame is flagged.
+    ``min_texture_grey``: a floor image whose local contrast beyond the sensor's noise (``floor_texture``, grey
+    levels) is lower holds nothing to track, and the frame is flagged.
     ``flat_field_px``: each image is divided by its mean over boxes this wide before tracking, which removes slow
     brightness gradients (0: not). ``normalise_brightness``: False tracks the images as they come (no flat field,
     no common mean and contrast), to see what the normalisation is for.
@@ -86,7 +87,7 @@ class KLTParameters:
     min_kept_ratio: float = 0.3
     inlier_px: float = 1.0
     min_inlier_ratio: float = 0.5
-    min_texture_grey: float = 4.0
+    min_texture_grey: float = 1.5
     flat_field_px: int = 41
     normalise_brightness: bool = True
 
@@ -283,7 +284,7 @@ class FloorFlow:
 
     def _normalised(self, image: np.ndarray) -> tuple[np.ndarray, float]:
         """``image`` divided by its local mean (a flat field) and scaled to one mean and contrast over the mask, and
-        its local contrast in grey levels (the standard deviation of the image minus its local mean).
+        its local contrast beyond noise in grey levels (``floor_texture``).
 
         Lucas-Kanade assumes constant brightness. A few per cent of exposure flicker on a low-contrast floor pulls
         every track off, and a brightness gradient fixed to the camera (vignetting, the robot's own light) pulls
@@ -293,9 +294,9 @@ class FloorFlow:
         size = self.parameters.flat_field_px or CONTRAST_BOX_PX
         floor = image.astype(np.float32)
         local_mean = cv2.blur(floor, (size, size))
+        texture = floor_texture(floor - local_mean, self._valid)
         sample = np.s_[::STATISTICS_STEP, ::STATISTICS_STEP]  # a quarter of the pixels: plenty for mean and spread
         mask = None if self._valid is None else self._valid[sample]
-        texture = float(cv2.meanStdDev(floor[sample] - local_mean[sample], mask=mask)[1][0, 0])
         if not self.parameters.normalise_brightness:
             return image, texture
         if self.parameters.flat_field_px:
@@ -332,6 +333,30 @@ class FloorFlow:
         inside = (u >= 0) & (u < width) & (v >= 0) & (v < height)
         inside[inside] = self._detect_mask[v[inside], u[inside]] > 0
         return inside
+
+
+def floor_texture(detail: np.ndarray, valid: np.ndarray | None = None) -> float:
+    """The floor image's local contrast beyond the sensor's noise, grey levels: the square root of how much
+    ``detail`` (the image less its local mean, float32) agrees with itself ``TEXTURE_LAG_PX`` pixels across and
+    down (its autocovariance there), over the pixels ``valid`` (uint8, nonzero) at both ends; 0 when it disagrees.
+
+    Sensor noise adds to every pixel's variance, and a standard deviation counts it as contrast: on the simulated
+    T265 a uniform grey floor reads 2.3-2.7 grey levels, a matte screed that tracks to a few hundredths of a per cent
+    3.3-4.9. But each pixel's noise is its own, spread by the floor image's resampling over a pixel or two at most,
+    so it adds next to nothing to the covariance 3 px away (0.2-0.4), while the floor's grain is wider than that
+    and adds to both (the screed 2.3-3.8). A smeared frame keeps its texture along one direction, and the forward-
+    backward check flags it.
+    """
+    lag = TEXTURE_LAG_PX
+    products, weights = 0.0, 0.0
+    for ahead, behind in ((np.s_[:, lag:], np.s_[:, :-lag]), (np.s_[lag:, :], np.s_[:-lag, :])):
+        pair = detail[ahead] * detail[behind]
+        if valid is None:
+            products, weights = products + float(pair.sum(dtype=np.float64)), weights + pair.size
+        else:
+            both = (valid[ahead] > 0) & (valid[behind] > 0)
+            products, weights = products + float(pair[both].sum(dtype=np.float64)), weights + int(both.sum())
+    return float(np.sqrt(max(products / max(weights, 1), 0.0)))
 
 
 def _slower(vectors: np.ndarray, median: np.ndarray) -> int:

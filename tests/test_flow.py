@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from gpo.flow import LAYER_MIN_TRACKS, FloorFlow, FlowError, KLTParameters, floor_layer
+from gpo.flow import LAYER_MIN_TRACKS, TEXTURE_LAG_PX, FloorFlow, FlowError, KLTParameters, floor_layer, floor_texture
 from gpo.kinematics import increment_from_point_pairs
 
 
@@ -153,6 +153,41 @@ def test_sensor_noise_on_a_blank_floor_is_not_texture():
     blank = [np.clip(128 + 1.5 * rng.standard_normal((240, 240)), 0, 255).astype(np.uint8) for _ in range(2)]
     measurement = _track(*blank)
     assert measurement.quality.flag.startswith("no texture")
+
+
+def _grain(size: int, sigma: float, seed: int) -> np.ndarray:
+    """White noise of unit standard deviation blurred by a Gaussian of ``sigma`` px and scaled back to unit
+    standard deviation: its autocorrelation at a lag of L px is exp(-L**2 / (4 sigma**2))."""
+    noise = np.random.default_rng(seed).standard_normal((size, size)).astype(np.float32)
+    field = cv2.GaussianBlur(noise, (0, 0), sigma)
+    return field / field.std()
+
+
+def test_floor_texture_counts_the_grain_and_not_the_noise():
+    grain, noise = 3.0 * _grain(600, 3.0, 1), 3.0 * np.random.default_rng(2).standard_normal((600, 600))
+    expected = 3.0 * np.exp(-(TEXTURE_LAG_PX**2) / (8 * 3.0**2))  # the square root of the autocorrelation
+    assert floor_texture(grain) == pytest.approx(expected, rel=0.1)
+    assert floor_texture((grain + noise).astype(np.float32)) == pytest.approx(floor_texture(grain), rel=0.05)
+    assert floor_texture(noise.astype(np.float32)) < 0.2  # a standard deviation of 3 grey levels
+    valid = np.zeros((600, 600), np.uint8)
+    valid[:, :300] = 1
+    outside = grain.copy()
+    outside[:, 300:] = 1e3
+    assert floor_texture(outside, valid) == pytest.approx(floor_texture(grain[:, :300]), rel=1e-4)
+
+
+def test_a_faint_grain_under_stronger_noise_is_tracked():
+    """A matte screed: grain of 2.5 grey levels under noise of 3, a standard deviation of about 4 in all; the
+    noise differs from frame to frame, the grain moves by (1.5, 4.0) px."""
+    rng = np.random.default_rng(5)
+    grain = 2.5 * _grain(240, 2.0, 3)
+    frames = [
+        np.clip(160 + moved + 3.0 * rng.standard_normal(moved.shape), 0, 255).astype(np.uint8)
+        for moved in (grain, _moved(grain, 1.5, 4.0))
+    ]
+    measurement = _track(*frames)
+    assert measurement.quality.ok
+    np.testing.assert_allclose(measurement.median, [1.5, 4.0], atol=0.1)
 
 
 def test_losing_most_tracks_is_flagged_even_when_enough_remain():

@@ -12,7 +12,7 @@ from gpo.bag import Recording
 from gpo.camera import EUCM, Pinhole
 from gpo.sim.floors import FLOOR_KINDS, FloorDesign, make_floor
 from gpo.sim.motion import MotionPlan, Slide, Spin, Straight, tracking_odometry
-from gpo.sim.population import DOWNWARD, FISHEYE, MIN_FOOTPRINT_M, PATH_LENGTH_M, ROOM_M, draw
+from gpo.sim.population import DOWNWARD, FISHEYE, MIN_FOOTPRINT_M, PATH_LENGTH_M, ROOM_M, draw, matte
 from gpo.sim.record import GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, START_NS, recording, setup_of
 
 SEEDS = range(40)
@@ -99,6 +99,29 @@ def test_a_mixed_floor_is_made_of_its_kinds():
     assert (is_wood | is_industrial)[distinct].mean() > 0.95  # away from the edges a texel is one kind's
     assert 0.15 < is_wood[distinct].mean() < 0.85  # and both kinds show
     assert mixed.sheen and mixed.kind == "wood+industrial"
+
+
+def test_a_floors_sheen_can_be_taken_off_or_put_on():
+    extent, texel = (0.0, 1.0, 0.0, 1.0), 4e-3
+    glossy = FloorDesign(("industrial",)).texture(extent, texel, 3)
+    matte_screed = FloorDesign(("industrial",), sheen=False).texture(extent, texel, 3)
+    assert glossy.sheen and not matte_screed.sheen
+    assert all(np.array_equal(a, b) for a, b in zip(glossy.levels, matte_screed.levels, strict=True))
+    assert FloorDesign(("wood",), sheen=True).texture(extent, texel, 3).sheen
+    assert not FloorDesign(("wood", "industrial"), sheen=False).texture(extent, texel, 3).sheen
+    with pytest.raises(ValueError, match="sheen"):
+        FloorDesign(("wood",), sheen="yes")
+
+
+def test_a_matte_draw_is_the_same_world_without_the_sheen():
+    chosen = draw(2)
+    plain = matte(chosen)
+    assert chosen.setup.floor.kinds == ("industrial",) and plain.setup.floor.sheen is False
+    assert plain.setup.floor == dataclasses.replace(chosen.setup.floor, sheen=False)
+    for part in ("rig", "plan", "drift", "seed"):
+        assert getattr(plain.setup, part) == getattr(chosen.setup, part)
+    assert plain.parameters == {**chosen.parameters, "sheen": "off"} and plain.label == chosen.label
+    assert plain.setup.description() != chosen.setup.description()  # a recording of its own
 
 
 def short(chosen, segments: int, rate_hz: float):

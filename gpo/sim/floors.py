@@ -21,7 +21,7 @@ A ``FloorDesign`` names what a recording's floor is made of: one kind, or severa
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -87,11 +87,14 @@ def make_floor(
 @dataclass(frozen=True)
 class FloorDesign:
     """What a floor is made of: ``kinds`` (of ``FLOOR_KINDS``; several are mixed in patches of about ``patch_m``
-    metres, each meeting the next over ``MIX_EDGE_M``) and the ``photos`` its grain comes from (of ``PHOTOS``)."""
+    metres, each meeting the next over ``MIX_EDGE_M``) and the ``photos`` its grain comes from (of ``PHOTOS``).
+    ``sheen``: None gives the floor the reflective sheen its kinds have (the industrial screed's); False or True
+    takes it off or puts it on (a matte screed, a polished wood), the texture unchanged."""
 
     kinds: tuple[str, ...]
     photos: tuple[str, ...] = DEFAULT_PHOTOS
     patch_m: float = 1.0
+    sheen: bool | None = None
 
     def __post_init__(self):
         if not self.kinds or any(kind not in FLOOR_KINDS for kind in self.kinds):
@@ -99,13 +102,16 @@ class FloorDesign:
         _check_photos(self.photos)
         if not self.patch_m > 0:
             raise ValueError(f"patch_m must be > 0, got {self.patch_m!r}")
+        if self.sheen not in (None, False, True):
+            raise ValueError(f"sheen is None (as the kinds have it), False or True, got {self.sheen!r}")
 
     def texture(self, extent: tuple[float, float, float, float], texel: float, seed: int) -> FloorTexture:
         """The floor covering ``extent`` (x_min, x_max, y_min, y_max, metres) at ``texel`` metres per texel: one
         kind as ``make_floor`` makes it, or each kind made with its own seed and blended by the weights
         softmax(f_k / (``MIX_EDGE_M`` / ``patch_m``)) of smooth random fields f_k varying over ``patch_m``."""
         if len(self.kinds) == 1:
-            return make_floor(self.kinds[0], extent, texel, seed, self.photos)
+            floor = make_floor(self.kinds[0], extent, texel, seed, self.photos)
+            return floor if self.sheen is None else replace(floor, sheen=self.sheen)
         floors = [make_floor(kind, extent, texel, [seed, k], self.photos) for k, kind in enumerate(self.kinds)]
         shape = floors[0].levels[0].shape
         rng = np.random.default_rng([seed, len(self.kinds)])
@@ -114,7 +120,7 @@ class FloorDesign:
         weights = np.exp(fields - fields.max(axis=0))
         image = sum(w * f.levels[0] for w, f in zip(weights, floors, strict=True)) / weights.sum(axis=0)
         image = np.clip(np.rint(image), 0, 255).astype(np.uint8)
-        sheen = any(floor.sheen for floor in floors)
+        sheen = any(floor.sheen for floor in floors) if self.sheen is None else self.sheen
         return FloorTexture(mip_pyramid(image), floors[0].origin, texel, "+".join(self.kinds), sheen)
 
 

@@ -10,14 +10,15 @@ tracking camera (``DRIFT``), odd seeds a downward pinhole camera of another foca
 the robot (``DOWNWARD``); a floor of one kind or a mix of kinds, its grain from other photographs; a path of
 ``PATH_LENGTH_M`` metres in a room of ``ROOM_M`` (forward and reverse legs, arcs and bends, spins on the spot, and
 for the downward camera's omnidirectional robot sideways and diagonal slides). ``render_draws(client, draws)``
-renders them as ``render`` does presets. The same seed draws the same world on every machine.
+renders them as ``render`` does presets. The same seed draws the same world on every machine; ``matte(draw)`` is
+that world with its floor's glossy sheen taken off.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -125,6 +126,13 @@ def draw(seed: int) -> Draw:
         **drift_parameters,
     }
     return Draw(int(seed), kind, setup, parameters)
+
+
+def matte(chosen: Draw) -> Draw:
+    """``chosen``'s world with its floor's reflective sheen taken off (``FloorDesign.sheen``): the same rig, path,
+    drift and texture, so that the difference between the two is what a glossy floor's reflections cost."""
+    floor = replace(chosen.setup.floor, sheen=False)
+    return replace(chosen, setup=replace(chosen.setup, floor=floor), parameters={**chosen.parameters, "sheen": "off"})
 
 
 def _fisheye(rng: np.random.Generator) -> tuple[Rig, dict]:
