@@ -341,10 +341,10 @@ def floor_texture(detail: np.ndarray, valid: np.ndarray | None = None) -> float:
     down (its autocovariance there), over the pixels ``valid`` (uint8, nonzero) at both ends; 0 when it disagrees.
 
     Sensor noise adds to every pixel's variance, and a standard deviation counts it as contrast: on the simulated
-    T265 a uniform grey floor reads 2.3-2.7 grey levels, a matte screed that tracks to a few hundredths of a per cent
-    3.3-4.9. But each pixel's noise is its own, spread by the floor image's resampling over a pixel or two at most,
+    T265 a uniform grey floor reads 1.5-2.7 grey levels, a matte screed that gpo-exact follows to about 0.1 % of the
+    distance 3.3-4.9. But each pixel's noise is its own, spread by the floor image's resampling over a pixel or two,
     so it adds next to nothing to the covariance 3 px away (0.2-0.4), while the floor's grain is wider than that
-    and adds to both (the screed 2.3-3.8). A smeared frame keeps its texture along one direction, and the forward-
+    and adds to both (the screed 2.3-3.9). A smeared frame keeps its texture along one direction, and the forward-
     backward check flags it.
     """
     lag = TEXTURE_LAG_PX
