@@ -295,10 +295,10 @@ class FloorFlow:
         floor = image.astype(np.float32)
         local_mean = cv2.blur(floor, (size, size))
         texture = floor_texture(floor - local_mean, self._valid)
-        sample = np.s_[::STATISTICS_STEP, ::STATISTICS_STEP]  # a quarter of the pixels: plenty for mean and spread
-        mask = None if self._valid is None else self._valid[sample]
         if not self.parameters.normalise_brightness:
             return image, texture
+        sample = np.s_[::STATISTICS_STEP, ::STATISTICS_STEP]  # a quarter of the pixels: plenty for mean and spread
+        mask = None if self._valid is None else self._valid[sample]
         if self.parameters.flat_field_px:
             floor = cv2.divide(floor, local_mean)  # where the local mean is 0, so is the image: 0
         mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(floor[sample], mask=mask))
@@ -390,8 +390,7 @@ def floor_layer(start: np.ndarray, end: np.ndarray, nadir: np.ndarray) -> np.nda
     fit, _ = cv2.estimateAffinePartial2D(start, end, method=cv2.RANSAC, ransacReprojThreshold=LAYER_RADIUS_PX)
     if fit is None:
         return everything
-    angle = np.arctan2(fit[1, 0], fit[0, 0])
-    rotation = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    rotation = fit[:, :2] / np.hypot(fit[0, 0], fit[1, 0])  # the fit is scale times rotation
     moved = end - nadir - (start - nadir) @ rotation.T  # each track's displacement once the rotation is out
     blend = np.median(moved, axis=0)
     near = np.linalg.norm(moved[:, None] - moved[None], axis=2) < LAYER_RADIUS_PX
