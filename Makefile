@@ -1,6 +1,6 @@
 # gpo: `make test` checks everything, `make demo` runs the main job into out/, `make lab` opens the notebooks.
-# `make book` builds the executed notebooks, without running them, into a static HTML site: out/book/index.html, its
-# formulas rendered offline by the MathJax of the pinned PyPI package jupyter-server-mathjax.
+# `make book` builds the executed notebooks, without running them, into a Jupyter Book (docs/book/): out/book/index.html;
+# it builds and reads offline, its formulas rendered by the MathJax of the pinned PyPI package jupyter-server-mathjax.
 # `make test-browser` runs every chapter's panels in JupyterLab in Debian's Chromium (installed with apt when missing); `make
 # test` includes it.
 # Each creates .venv from environment.txt first when it is missing or environment.txt has changed.

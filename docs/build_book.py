@@ -1,12 +1,20 @@
-"""Build the executed notebooks into a static HTML book, without running them.
+"""Build the executed notebooks into the static HTML book of `make book`, without running them.
 
-One page per chapter, named as its notebook (nbconvert's "lab" template; figures embedded as data URIs), with
-"contents", "previous" and "next" links at its top and bottom, and an index.html listing every chapter's title
-and its sections. Chapters follow the order of README.md's chapter table; notebooks it does not list come last.
-The ipywidgets panels need no JavaScript: each is shown as it stands in the saved notebook, a line with its
-controls' default values followed by the panel's stored output. The formulas are rendered by MathJax 2.7, shipped
-with the book from the pinned PyPI package jupyter-server-mathjax (copied to out/book/mathjax/): the pages read
-offline, with no CDN.
+The book is a Jupyter Book 1 (Sphinx, MyST-NB, sphinx-book-theme): its configuration, table of contents, front page
+and references are in docs/book/. This script lays them in a temporary folder beside the output with a copy of each
+chapter listed in docs/book/_toc.yml, builds that folder with ``jupyter-book build`` and renames the HTML into place:
+a search page, the chapters in a sidebar, each page's sections beside it, the papers as citations.
+
+Two things are done here because the book must read offline:
+
+- the ipywidgets panels need no JavaScript: each widget view becomes what it stands for in the saved notebook, a
+  line with its controls' default values followed by the panel's stored output, and the widget state is dropped
+  (MyST-NB would otherwise load a widget manager and require.js from the web);
+- the formulas are rendered by MathJax 2.7 from the pinned PyPI package jupyter-server-mathjax, copied among the
+  book's static files (docs/book/_config.yml points ``mathjax_path`` at it): no CDN.
+
+A notebook that the table of contents does not list stops the build; a chapter missing from ``--notebooks`` is left
+out of the book, so that a few chapters build on their own.
 
     python docs/build_book.py --notebooks notebooks --out out/book
 """
@@ -14,86 +22,25 @@ offline, with no CDN.
 import argparse
 import html
 import shutil
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import jupyter_server_mathjax
 import nbformat
-from bs4 import BeautifulSoup, SoupStrainer
-from jinja2 import DictLoader
-from nbconvert import HTMLExporter
+import yaml
 
 WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
 WIDGET_STATE = "application/vnd.jupyter.widget-state+json"
-README = Path(__file__).resolve().parents[1] / "README.md"
-BOOK_TITLE = "gpo — visual odometry from the floor"
+BOOK = Path(__file__).resolve().parent / "book"
 MATHJAX = Path(jupyter_server_mathjax.__file__).parent / "static"
-MATHJAX_URL = "mathjax/MathJax.js?config=TeX-AMS-MML_HTMLorMML-full,Safe"
-"""MathJax relative to a chapter page, with the configuration the package bundles (its only web font is STIX)."""
-
-CHAPTER_TEMPLATE = """{%- extends 'index.html.j2' -%}
-{% block extra_css %}
-<script type="text/x-mathjax-config">
-MathJax.Hub.Config({"HTML-CSS": {availableFonts: [], webFont: "STIX-Web", imageFont: null}});
-</script>
-<style type="text/css">
-nav.book-nav { display: flex; gap: 1.5em; padding: 0.6em 1em; font-family: var(--jp-ui-font-family); }
-nav.book-nav a { text-decoration: none; }
-p.book-panel { font-family: var(--jp-code-font-family); }
-</style>
-{% endblock extra_css %}
-{% block body_header %}{{ super() }}{{ resources.book_nav }}{% endblock body_header %}
-{% block body_footer %}{{ resources.book_nav }}{{ super() }}{% endblock body_footer %}
-"""
-
-INDEX_PAGE = """<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8" />
-<meta name="viewport" content="width=device-width, initial-scale=1.0">
-<title>{title}</title>
-<style type="text/css">
-body {{ max-width: 52em; margin: 2em auto; padding: 0 1em; font-family: sans-serif; line-height: 1.5; }}
-ul.chapters {{ list-style: none; padding-left: 0; }}
-ul.chapters > li {{ margin-top: 0.8em; font-weight: bold; }}
-ul.chapters ul {{ font-weight: normal; }}
-a {{ text-decoration: none; }}
-</style>
-</head>
-<body>
-<h1>{title}</h1>
-<p>The chapters as they read after a run. The interactive panels are shown at their default settings;
-<code>make lab</code> opens the notebooks to move them.</p>
-<ul class="chapters">
-{chapters}
-</ul>
-</body>
-</html>
-"""
+JUPYTER_BOOK = Path(sys.executable).with_name("jupyter-book")
 
 
-def reading_order(paths: list[Path], readme: Path = README) -> list[Path]:
-    """The notebooks in the order README.md's chapter table lists them; those it does not list follow by name."""
-    text = readme.read_text(encoding="utf-8") if readme.exists() else ""
-
-    def rank(path: Path) -> tuple[bool, int, str]:
-        position = text.find(f"{path.stem}.ipynb")
-        return position < 0, position, path.name
-
-    return sorted(paths, key=rank)
-
-
-def chapter_title(nb: nbformat.NotebookNode, default: str) -> str:
-    """The notebook's first markdown heading (outside fenced code), without its leading #s; ``default`` if none."""
-    for cell in nb.cells:
-        if cell.cell_type != "markdown":
-            continue
-        fenced = False
-        for line in cell.source.splitlines():
-            if line.lstrip().startswith("```"):
-                fenced = not fenced
-            elif not fenced and line.startswith("#"):
-                return line.lstrip("#").strip()
-    return default
+def toc_chapters(toc: Path = BOOK / "_toc.yml") -> list[str]:
+    """The file names (without suffix) of the table of contents' chapters, in reading order."""
+    return [entry["file"] for entry in yaml.safe_load(toc.read_text(encoding="utf-8"))["chapters"]]
 
 
 def panel_models(state: dict, model_id: str) -> list[dict]:
@@ -154,59 +101,44 @@ def without_widgets(nb: nbformat.NotebookNode) -> nbformat.NotebookNode:
     return nb
 
 
-def navigation(pages: list[str], titles: list[str], k: int) -> str:
-    """The contents/previous/next bar of the k-th page; the first and last pages lead back to the contents."""
-    previous = (pages[k - 1], titles[k - 1]) if k > 0 else ("index.html", "contents")
-    following = (pages[k + 1], titles[k + 1]) if k + 1 < len(pages) else ("index.html", "contents")
-    return (
-        '<nav class="book-nav">'
-        '<a href="index.html" rel="contents">contents</a>'
-        f'<a href="{previous[0]}" rel="prev" title="{html.escape(previous[1])}">← previous</a>'
-        f'<a href="{following[0]}" rel="next" title="{html.escape(following[1])}">next →</a>'
-        "</nav>"
-    )
-
-
-def sections(page: str) -> list[tuple[str, str]]:
-    """The (id, text) of each second-level heading of a chapter page, in order (only those with an id)."""
-    soup = BeautifulSoup(page, "html.parser", parse_only=SoupStrainer("h2"))
-    found = []
-    for heading in soup.find_all("h2", id=True):
-        for anchor in heading.select("a.anchor-link"):
-            anchor.decompose()
-        found.append((heading["id"], heading.get_text().strip()))
-    return found
-
-
-def index_entry(page: str, title: str, headings: list[tuple[str, str]]) -> str:
-    """One chapter's item in the table of contents: its title, and a list of its sections."""
-    items = "".join(f'<li><a href="{page}#{html.escape(i)}">{html.escape(text)}</a></li>' for i, text in headings)
-    return f'<li><a href="{page}">{html.escape(title)}</a>\n<ul>{items}</ul></li>'
+def lay_out_sources(notebooks: Path, source: Path) -> list[str]:
+    """Fill ``source`` with the book's own files, MathJax and a static copy of each chapter found in ``notebooks``;
+    its _toc.yml lists only those chapters. Returns the chapters laid out, in reading order."""
+    chapters = toc_chapters()
+    found = {path.stem: path for path in notebooks.glob("*.ipynb")}
+    unlisted = sorted(set(found) - set(chapters))
+    if unlisted:
+        raise SystemExit(f"{BOOK / '_toc.yml'} does not list {', '.join(unlisted)}: add each in its reading place")
+    shutil.copytree(BOOK, source, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(MATHJAX, source / "_assets" / "mathjax")
+    present = [name for name in chapters if name in found or (BOOK / f"{name}.md").is_file()]
+    for name in present:
+        if name in found:
+            nb = without_widgets(nbformat.read(found[name], as_version=4))
+            nbformat.write(nb, source / f"{name}.ipynb")
+    toc = yaml.safe_load((BOOK / "_toc.yml").read_text(encoding="utf-8"))
+    toc["chapters"] = [entry for entry in toc["chapters"] if entry["file"] in present]
+    (source / "_toc.yml").write_text(yaml.safe_dump(toc, sort_keys=False), encoding="utf-8")
+    return [name for name in present if name in found]
 
 
 def build_book(notebooks: Path, out: Path) -> list[Path]:
-    """Write one HTML page per notebook of ``notebooks`` and index.html into ``out``; returns the pages written."""
-    paths = reading_order(sorted(notebooks.glob("*.ipynb")))
-    chapters = [without_widgets(nbformat.read(path, as_version=4)) for path in paths]
-    pages = [f"{path.stem}.html" for path in paths]
-    titles = [chapter_title(nb, path.stem) for nb, path in zip(chapters, paths, strict=True)]
-    exporter = HTMLExporter(
-        template_name="lab",
-        extra_loaders=[DictLoader({"book.html.j2": CHAPTER_TEMPLATE})],
-        template_file="book.html.j2",
-        mathjax_url=MATHJAX_URL,
-    )
-    out.mkdir(parents=True, exist_ok=True)
-    shutil.copytree(MATHJAX, out / "mathjax", dirs_exist_ok=True)
-    entries = []
-    for k, nb in enumerate(chapters):
-        nb.metadata["title"] = titles[k]
-        body, _ = exporter.from_notebook_node(nb, resources={"book_nav": navigation(pages, titles, k)})
-        (out / pages[k]).write_text(body, encoding="utf-8")
-        entries.append(index_entry(pages[k], titles[k], sections(body)))
-    index = INDEX_PAGE.format(title=html.escape(BOOK_TITLE), chapters="\n".join(entries))
-    (out / "index.html").write_text(index, encoding="utf-8")
-    return [out / page for page in pages]
+    """Build the book of the notebooks in ``notebooks`` into ``out`` (replaced whole); returns the chapter pages."""
+    if not JUPYTER_BOOK.is_file():
+        raise SystemExit(f"no {JUPYTER_BOOK}: jupyter-book is installed from environment.txt")
+    out = out.resolve()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}-") as work:
+        source = Path(work) / "source"
+        chapters = lay_out_sources(notebooks, source)
+        command = [str(JUPYTER_BOOK), "build", str(source), "--path-output", work, "--builder", "html", "--all"]
+        done = subprocess.run([*command, "--warningiserror", "--keep-going", "--quiet"], capture_output=True, text=True)
+        if done.returncode:
+            raise SystemExit(f"jupyter-book build failed:\n{done.stdout}{done.stderr}")
+        if out.exists():
+            shutil.rmtree(out)
+        (Path(work) / "_build" / "html").rename(out)
+    return [out / f"{name}.html" for name in chapters]
 
 
 def main() -> None:
@@ -216,7 +148,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("out/book"), help="where the HTML pages go")
     args = parser.parse_args()
     pages = build_book(args.notebooks, args.out)
-    print(f"{len(pages)} chapters and index.html written to {args.out}")
+    print(f"{len(pages)} chapters, index.html and search.html written to {args.out}")
 
 
 if __name__ == "__main__":

@@ -1,18 +1,22 @@
-"""The static HTML book of `make book`: built from the committed notebooks, checked against the notebooks' own JSON."""
+"""The static HTML book of `make book`: built from the committed notebooks, checked against the notebooks' own JSON,
+README.md's chapter table and docs/book/."""
 
 import functools
 import hashlib
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+import yaml
 from bs4 import BeautifulSoup
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
+BOOK_SOURCE = ROOT / "docs" / "book"
 VIEW = "application/vnd.jupyter.widget-view+json"
 
 
@@ -24,7 +28,7 @@ def _digest(paths: list[Path]) -> str:
 @pytest.fixture(scope="module")
 def book(tmp_path_factory) -> Path:
     """The book, built once by the command line into a temporary directory; the notebooks are left as they were."""
-    out = tmp_path_factory.mktemp("book")
+    out = tmp_path_factory.mktemp("book") / "book"
     before = _digest(NOTEBOOKS)
     command = [sys.executable, str(ROOT / "docs" / "build_book.py"), "--notebooks", str(ROOT / "notebooks")]
     subprocess.run([*command, "--out", str(out)], check=True, capture_output=True)
@@ -54,6 +58,22 @@ def _markdown_headings(nb: dict) -> list[str]:
                 if not fenced and line.startswith("#"):
                     headings.append(line)
     return headings
+
+
+def _plain(text: str) -> str:
+    """A heading as the page shows it: no leading #s, no code or emphasis marks, typographic apostrophes."""
+    return re.sub(r"[`*]", "", text.lstrip("#")).replace("'", "\u2019").strip()
+
+
+def _readme_chapters() -> list[str]:
+    """The notebooks named by README.md's chapter table, in its order."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8").split("\n## Chapters\n", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"^\| \[`([^`]+)`\]\(notebooks/\1\.ipynb\)", text, flags=re.MULTILINE)
+
+
+def _toc() -> list[str]:
+    """docs/book/_toc.yml's pages after the front page, in order."""
+    return [entry["file"] for entry in yaml.safe_load((BOOK_SOURCE / "_toc.yml").read_text())["chapters"]]
 
 
 def _state(nb: dict) -> dict:
@@ -94,29 +114,85 @@ def _expected(control: dict) -> str | float | None:
     return str(value) if isinstance(value, bool) else value
 
 
-def test_one_page_per_notebook_and_an_index_linking_every_section(book):
-    index = _soup(book / "index.html")
-    links = [a["href"] for a in index.find_all("a", href=True)]
+def test_the_table_of_contents_follows_the_readme_and_holds_every_notebook():
+    chapters = _readme_chapters()
+    assert sorted(chapters) == sorted(path.stem for path in NOTEBOOKS)
+    assert _toc() == [*chapters, "references"]
+
+
+def test_the_sidebar_lists_the_pages_in_reading_order(book):
+    order = ["index", *_toc()]
+    for name in order:
+        nav = _soup(book / f"{name}.html").select_one("nav.bd-docs-nav")
+        links = [a["href"].removesuffix(".html") for a in nav.select("a.reference.internal")]
+        assert [link if link != "#" else name for link in links] == order, name
+
+
+def test_every_page_leads_on_through_the_book(book):
+    order = ["index", *_toc()]
+    for k, name in enumerate(order):
+        head = _soup(book / f"{name}.html").head
+        following, previous = head.find("link", rel="next"), head.find("link", rel="prev")
+        assert (following["href"] if following else None) == (f"{order[k + 1]}.html" if k + 1 < len(order) else None)
+        assert (previous["href"] if previous else None) == (f"{order[k - 1]}.html" if k else None)
+
+
+def test_the_front_page_links_every_chapter_and_its_sections(book):
+    contents = _soup(book / "index.html").select_one("div.toctree-wrapper")
+    links = contents.find_all("a", href=True)
     for notebook in NOTEBOOKS:
         page = f"{notebook.stem}.html"
         assert (book / page).is_file()
         headings = _markdown_headings(_notebook(notebook))
-        title = index.find("a", href=page)
-        assert title.get_text() == headings[0].lstrip("#").strip()
-        sections = [link for link in links if link.startswith(page + "#")]
-        assert len(sections) == sum(heading.startswith("## ") for heading in headings)
-    assert sorted(path.name for path in book.glob("*.html")) == sorted(
-        ["index.html", *(f"{n.stem}.html" for n in NOTEBOOKS)]
-    )
+        assert contents.find("a", href=page).get_text() == _plain(headings[0])
+        sections = {link.get_text() for link in links if link["href"].startswith(page + "#")}
+        assert {_plain(h) for h in headings if h.startswith("## ")} <= sections, notebook.stem
 
 
-def test_every_anchor_of_the_index_exists(book):
+def test_every_anchor_of_the_front_page_exists(book):
     ids = {}
-    for link in _soup(book / "index.html").find_all("a", href=True):
+    for link in _soup(book / "index.html").select("div.toctree-wrapper a[href]"):
         page, _, anchor = link["href"].partition("#")
         if page not in ids:
             ids[page] = {tag["id"] for tag in _soup(book / page).find_all(id=True)}
         assert not anchor or anchor in ids[page], link["href"]
+
+
+def test_the_search_index_holds_every_chapter(book):
+    assert (book / "search.html").is_file()
+    index = (book / "searchindex.js").read_text(encoding="utf-8")
+    found = json.loads(index[index.index("(") + 1 : index.rindex(")")])
+    assert set(found["docnames"]) == {"index", *_toc()}
+    docnames = found["docnames"]
+
+    def pages(stem: str) -> set[str]:
+        """The pages a word (as stemmed) is found on, in their text or their headings."""
+        found_in = []
+        for where in (found["terms"], found["titleterms"]):
+            listed = where.get(stem, [])
+            found_in += listed if isinstance(listed, list) else [listed]
+        return {docnames[k] for k in found_in}
+
+    assert "02_cubemap" in pages("cubemap")
+    assert "06_kinematics" in pages("bicycl")
+
+
+def test_the_two_papers_are_cited_by_title(book):
+    references = _soup(book / "references.html").get_text()
+    for entry in re.findall(r"title\s*=\s*\{\{(.+)\}\},", (BOOK_SOURCE / "references.bib").read_text(encoding="utf-8")):
+        assert entry in " ".join(references.split())
+        assert entry in " ".join(_soup(book / "index.html").get_text().split())
+    citations = _soup(book / "index.html").select('a[href^="references.html#"]')
+    assert len(citations) == 2
+
+
+def test_nothing_is_loaded_from_the_web(book):
+    for page in book.glob("*.html"):
+        soup = _soup(page)
+        for tag, attribute in (("script", "src"), ("link", "href"), ("img", "src"), ("iframe", "src")):
+            for element in soup.find_all(tag, attrs={attribute: True}):
+                assert "//" not in element[attribute], (page.name, str(element)[:200])
+        assert "require.js" not in page.read_text(encoding="utf-8")
 
 
 def test_no_widget_views_and_no_widget_manager(book):
@@ -151,20 +227,6 @@ def test_panels_show_their_defaults_and_every_figure(book, notebook):
     outputs += [
         out for models in panels for m in models if m["model_name"] == "OutputModel" for out in m["state"]["outputs"]
     ]
-    assert len(page.find_all("img")) >= sum("image/png" in output.get("data", {}) for output in outputs)
-
-
-def test_every_page_leads_to_the_contents_and_on_through_the_book(book):
-    page = _soup(book / "index.html").select_one("ul.chapters > li > a")["href"]
-    visited = [page]
-    while (page := _soup(book / page).find("a", rel="next")["href"]) != "index.html":
-        visited.append(page)
-        assert len(visited) <= len(NOTEBOOKS)
-    assert sorted(visited) == sorted(f"{n.stem}.html" for n in NOTEBOOKS)
-    for k, name in enumerate(visited):
-        soup = _soup(book / name)
-        for rel in ("contents", "prev", "next"):
-            links = soup.find_all("a", rel=rel)
-            assert len(links) == 2, (name, rel)
-            assert all((book / link["href"]).is_file() for link in links)
-        assert soup.find("a", rel="prev")["href"] == (visited[k - 1] if k else "index.html")
+    images = page.select("main img")
+    assert len(images) >= sum("image/png" in output.get("data", {}) for output in outputs)
+    assert all((book / image["src"]).is_file() for image in images if not image["src"].startswith("data:"))
