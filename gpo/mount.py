@@ -422,9 +422,9 @@ def _refine_pose(corners: np.ndarray, camera: EUCM | Pinhole, board: Chessboard,
         lambda delta: _reprojection(corners, camera, board, _perturbed(initial, delta)),
         np.zeros(6),
         x_scale="jac",
-        xtol=1e-15,
-        ftol=1e-15,
-        gtol=1e-15,
+        xtol=1e-12,  # tolerances every floating-point path reaches (the pose is then fixed to about 1e-9 m)
+        ftol=1e-12,
+        gtol=1e-12,
     )
     return _perturbed(initial, fit.x)
 

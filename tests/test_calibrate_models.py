@@ -31,10 +31,8 @@ def test_every_fisheye_model_recovers_the_truth_within_three_sigma(model):
         pixels, valid = truth.project(rotation.apply(CALIBRATION_BOARD.inner_corners()) + position)
         assert valid.all()
         corners.append(pixels + rng.normal(0.0, NOISE_PX, pixels.shape))
-    # the omni model's xi, f and k1 nearly trade off against one another: its fit crawls along that valley
-    iterations = 600 if model == "omni" else 100
-    result = calibrate_corners(corners, CALIBRATION_BOARD, (848, 800), model, max_iterations=iterations)
-    assert result.ok, result.summary()
+    result = calibrate_corners(corners, CALIBRATION_BOARD, (848, 800), model)
+    assert result.ok, result.summary()  # converged on the tolerance, on any floating-point path
     assert type(result.camera) is type(truth) and result.rms_px < 1.1 * NOISE_PX
     errors = (result.camera.params - truth.params) / np.array(list(result.std.values()))
     assert np.all(np.abs(errors) < 3.0), dict(zip(truth.PARAMETER_NAMES, errors.round(2), strict=True))
