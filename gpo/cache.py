@@ -33,6 +33,7 @@ ENVIRONMENT_VARIABLE = "GPO_CACHE_DIR"
 KINDS = ("tables", "recordings", "runs", "datasets")
 MAX_BYTES = 30 * 2**30  # beyond this the oldest files that can be made again go, 5 full sets of recordings
 EVICTED_KINDS = ("tables", "recordings", "runs")
+KEY_DIGITS = 12  # significant digits of a float in a key: far above any setting's precision, below rounding's
 
 
 def root() -> Path:
@@ -49,11 +50,25 @@ def folder(kind: str) -> Path:
 
 def key(*parts, sources: Iterable[Path] = ()) -> str:
     """16 hex digits of the sha256 of ``parts`` (JSON: numbers, strings, lists, dicts; anything else as its
-    ``str``) and of the bytes of each file in ``sources``."""
-    digest = hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode())
+    ``str``) and of the bytes of each file in ``sources``.
+
+    Floats count to ``KEY_DIGITS`` significant digits: a value computed on another floating-point path (another
+    BLAS kernel, another SIMD level) differs in its last bits, and names the same file."""
+    digest = hashlib.sha256(json.dumps(_rounded(parts), sort_keys=True, default=str).encode())
     for source in sources:
         digest.update(Path(source).read_bytes())
     return digest.hexdigest()[:16]
+
+
+def _rounded(value):
+    """``value`` with every float rounded to ``KEY_DIGITS`` significant digits, in lists, tuples and dicts too."""
+    if isinstance(value, float):
+        return float(f"{value:.{KEY_DIGITS}g}")
+    if isinstance(value, dict):
+        return {name: _rounded(item) for name, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_rounded(item) for item in value]
+    return value
 
 
 def path(kind: str, name: str, file_key: str, suffix: str = "") -> Path:

@@ -38,6 +38,14 @@ def test_the_key_is_the_sha256_of_the_canonical_json_and_the_sources():
     assert cache.key(*parts, sources=sources) == digest.hexdigest()[:16]
 
 
+def test_floats_differing_in_their_last_bits_name_the_same_file():
+    # a plan's peak heading as OpenBLAS's SkylakeX and Nehalem kernels compute it
+    value, other_path = 0.4348502184339108, 0.4348502184339107
+    assert cache.key({"peak_heading_rad": value}) == cache.key({"peak_heading_rad": other_path})
+    assert cache.key({"peak_heading_rad": value}) != cache.key({"peak_heading_rad": value * (1 + 1e-9)})
+    assert cache.key([1.0, (2.5, {"x": 3.25})]) == cache.key([1.0, [2.5, {"x": 3.25}]])
+
+
 def test_a_changed_source_changes_the_key(tmp_path):
     source = tmp_path / "module.py"
     source.write_text("A = 1\n")
