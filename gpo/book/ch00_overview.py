@@ -1,4 +1,5 @@
-"""Chapter 00, the overview: the rig's view of the floor and a browser over a simulated recording."""
+"""Chapter 00, the overview: the rig's view of the floor, how far it reaches, and a browser over a simulated
+recording."""
 
 from __future__ import annotations
 
@@ -8,6 +9,31 @@ import numpy as np
 
 from gpo.bag import Recording
 from gpo.rig import Rig, floor_points, rays_in_base
+from gpo.sim.motion import tracking_odometry
+from gpo.sim.record import START_NS, preset
+from gpo.trajectory import base_from_sensor_odometry
+
+
+def floor_seen(rig: Rig, max_range: float = np.inf, step: int = 1) -> np.ndarray:
+    """The floor points (N, 2), metres in ``base_link``, of the rig's pixels on a grid every ``step`` pixels whose
+    ray meets the floor within ``max_range`` metres (horizontally) of the camera."""
+    pixels = rig.camera.pixel_grid()[::step, ::step]
+    rays, valid = rays_in_base(rig, pixels)
+    points, hits = floor_points(rig, rays)
+    with np.errstate(invalid="ignore"):
+        seen = valid & hits & (np.linalg.norm(points - rig.mount.position[:2], axis=-1) <= max_range)
+    return points[seen]
+
+
+def floor_extent_text(rig: Rig, max_range: float = np.inf) -> str:
+    """One line: the box (``base_link``, metres) around the floor that the rig's camera sees within ``max_range``."""
+    points = floor_seen(rig, max_range)
+    (x_min, y_min), (x_max, y_max) = points.min(axis=0), points.max(axis=0)
+    within = "" if np.isinf(max_range) else f" (within {max_range:.1f} m)"
+    return (
+        f"{rig.name}: floor seen{within} from x = {x_min:.2f} to {x_max:.2f} m and y = {y_min:.2f} to {y_max:.2f} m, "
+        f"a box {x_max - x_min:.2f} m long and {y_max - y_min:.2f} m wide"
+    )
 
 
 def draw_rig_footprint(rig: Rig, ax=None, max_range: float = 1.5, step: int = 8, color: str = "tab:blue") -> plt.Axes:
@@ -18,17 +44,29 @@ def draw_rig_footprint(rig: Rig, ax=None, max_range: float = 1.5, step: int = 8,
     """
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
-    pixels = rig.camera.pixel_grid()[::step, ::step]
-    rays, valid = rays_in_base(rig, pixels)
-    points, hits = floor_points(rig, rays)
-    with np.errstate(invalid="ignore"):
-        seen = valid & hits & (np.linalg.norm(points - rig.mount.position[:2], axis=-1) <= max_range)
-    ax.plot(points[seen, 0], points[seen, 1], ".", ms=1, color=color, label=f"floor seen by {rig.name}")
+    points = floor_seen(rig, max_range, step)
+    ax.plot(points[:, 0], points[:, 1], ".", ms=1, color=color, label=f"floor seen by {rig.name}")
     ax.plot(*rig.mount.position[:2], "^", ms=9, color="k", label="camera")
     ax.set_aspect("equal")
     ax.set_xlabel("x forward [m]")
     ax.set_ylabel("y left [m]")
     return ax
+
+
+def drift_by_seed(name: str = "sample", seeds=range(1, 13)) -> dict[int, float]:
+    """The tracking camera's final position error (metres, in the floor plane, its odometry expressed as base_link's
+    path) on preset ``name``'s path for each seed, as the preset's recording with that seed would hold it; no image is
+    rendered. Returns seed -> error."""
+    setup = preset(name).setup()
+    plan, mount = setup.plan, setup.rig.mount
+    truth = plan.ground_truth(120.0, START_NS)
+    start = (truth.rotations[0], truth.positions[0])
+    errors = {}
+    for seed in seeds:
+        odometry = tracking_odometry(plan, mount, 200.0, setup.drift, seed, START_NS)
+        path = base_from_sensor_odometry(odometry, (mount.body_rotation, mount.position), start)
+        errors[seed] = float(np.linalg.norm(path.positions[-1, :2] - truth.positions[-1, :2]))
+    return errors
 
 
 def recording_browser(path, topic: str | None = None, ground_truth_topic: str = "/mocap/base_link") -> widgets.VBox:
