@@ -430,7 +430,8 @@ def calibrate_corners(
 
 
 def _calibrate(
-    observed, dropped, names, board, image_size, model, fix_k3=False, max_iterations=MAX_EVALUATIONS, zero=(), prior=None
+    observed, dropped, names, board, image_size, model, fix_k3=False, max_iterations=MAX_EVALUATIONS, zero=(),
+    prior=None,
 ):
     scrambled = {index for index, corners in observed.items() if not _is_grid(corners, board.pattern_size)}
     dropped = {**dropped, **dict.fromkeys(scrambled, NOT_A_GRID)}

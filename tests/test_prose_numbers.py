@@ -74,7 +74,7 @@ def evaluate(expression: str) -> float:
             return FUNCTIONS[node.func.id](*(value(argument) for argument in node.args))
         raise ValueError(f"not a worked figure's expression: {ast.unparse(node)}")
 
-    return value(ast.parse(expression.replace("\u00d7", "*").replace("\u2212", "-"), mode="eval").body)
+    return value(ast.parse(expression.strip().replace("\u00d7", "*").replace("\u2212", "-"), mode="eval").body)
 
 
 def canonical(number: str) -> str:
@@ -206,6 +206,7 @@ def test_prose_numbers_reads_what_a_reader_reads(text, numbers):
 
 def test_a_worked_expression_is_evaluated():
     assert evaluate("752 / 600 \u00d7 0.25") == pytest.approx(0.31333, abs=1e-5)
+    assert evaluate(" 0.5 / 30 / 0.001") == pytest.approx(16.667, abs=1e-3)  # as a title writes it: "= 0.5 / 30 ..."
     assert evaluate("degrees(atan(0.5))") == pytest.approx(26.565, abs=1e-3)
     with pytest.raises(ValueError):
         evaluate("__import__('os')")
