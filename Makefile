@@ -11,10 +11,10 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.environment.stamp
 CHROMIUM := /usr/bin/chromium
 SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
-# runs a phase of `make test` and prints its time into the log (venv, recordings, tables, pytest)
+# runs a phase of `make test` and prints its time into the log (venv, recordings, tables, wheel, pytest)
 PHASE := .ci/phase
 
-.PHONY: test test-browser recordings tables demo lab book env clean
+.PHONY: test test-browser recordings tables wheel demo lab book env clean
 
 # two jobs at a time: Chromium is installed (apt, mostly waiting on the network) while the venv is made and the
 # recordings render; the phases that need each other still wait for each other
@@ -41,9 +41,9 @@ $(CHROMIUM):
 
 # The checks run two processes on the two cores; OpenCV's and OpenBLAS's own threads on top of them only cost processor
 # time (rendering takes 17 % less, the tests 7 % less, on one thread each)
-recordings tables test test-browser: export OPENCV_FOR_THREADS_NUM = 1
-recordings tables test test-browser: export OPENBLAS_NUM_THREADS = 1
-recordings tables test test-browser: export OMP_NUM_THREADS = 1
+recordings tables wheel test test-browser: export OPENCV_FOR_THREADS_NUM = 1
+recordings tables wheel test test-browser: export OPENBLAS_NUM_THREADS = 1
+recordings tables wheel test test-browser: export OMP_NUM_THREADS = 1
 
 # the simulated recordings that tests and chapters read, made once into the cache, longest first on two processes
 recordings: $(STAMP)
@@ -59,9 +59,15 @@ TABLE_JOBS := "gpo.book.ch08_table2 I" "gpo.book.ch08_table2 II" "gpo table4 lon
 tables: recordings
 	$(PHASE) tables sh -c 'printf "%s\n" $(TABLE_JOBS) | xargs -P 2 -L 1 $(BIN)/python -m > /dev/null'
 
+# gpo as a user installs it (.ci/wheel): the wheel, in a new environment with the newest releases pyproject.toml allows
+# (not environment.txt's pins), runs its command line on the sample recording from outside the checkout; half a
+# minute, beside `tables`
+wheel: recordings
+	$(PHASE) wheel .ci/wheel $(BIN)/uv $(PYTHON)
+
 # two workers (pytest-xdist), each test file on one of them: a notebook's cells share one kernel; the log lists the
 # 25 slowest tests, where the time goes
-test: $(STAMP) $(CHROMIUM) recordings tables
+test: $(STAMP) $(CHROMIUM) recordings tables wheel
 	$(BIN)/ruff check .
 	$(PHASE) pytest $(BIN)/python -m pytest -p no:cacheprovider -n 2 --dist loadfile --durations=25
 
