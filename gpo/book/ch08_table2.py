@@ -261,17 +261,24 @@ HEADER = (
 )
 
 
-def _number(value: float, width: int, digits: int) -> str:
-    return f"{'-':>{width}}" if value is None or np.isnan(value) else f"{value:{width}.{digits}f}"
+def _number(value: float, width: int, digits: int, significant: int | None = None) -> str:
+    if value is None or np.isnan(value):
+        return f"{'-':>{width}}"
+    if significant is not None:  # 876.3 -> '900' (1), 0.524 -> '0.5' (1)
+        return f"{float(f'{value:.{significant}g}'):>{width}g}"
+    return f"{value:{width}.{digits}f}"
 
 
-def format_row(label: str, row: PaperTable2) -> str:
-    """One line of Table 2 in the paper's column order ('-' for what is not given)."""
+def format_row(label: str, row: PaperTable2, significant: int | None = None) -> str:
+    """One line of Table 2 in the paper's column order ('-' for what is not given), each number to two decimals or,
+    with ``significant``, to that many significant digits (the distance, which the truth gives, to two decimals
+    always): for a run whose last digits depend on the processor's floating-point path, only the digits every path
+    agrees on."""
     return (
-        f"{label:14}{_number(row.distance_m, 9, 2)}{_number(row.positioning_rmse_mm, 10, 2)}"
-        f"{_number(row.heading_rmse_deg, 9, 2)}{_number(row.final_error_mm, 9, 2)}"
-        f"{_number(row.final_error_percent, 7, 2)}{_number(row.final_heading_deg, 9, 2)}"
-        f"{_number(row.relative_error_percent, 10, 2)}"
+        f"{label:14}{_number(row.distance_m, 9, 2)}{_number(row.positioning_rmse_mm, 10, 2, significant)}"
+        f"{_number(row.heading_rmse_deg, 9, 2, significant)}{_number(row.final_error_mm, 9, 2, significant)}"
+        f"{_number(row.final_error_percent, 7, 2, significant)}{_number(row.final_heading_deg, 9, 2, significant)}"
+        f"{_number(row.relative_error_percent, 10, 2, significant)}"
     )
 
 
