@@ -5,7 +5,17 @@ import numpy as np
 import pytest
 
 from gpo.book.ch04_ortho_gpi import table1_errors_panel
-from gpo.book.ch04_table1 import CALIBRATION_ERRORS, PAPER_TABLE1, format_paper_table1, miscalibrated, paper_table1
+from gpo.book.ch04_table1 import (
+    CALIBRATION_ERRORS,
+    PAPER_TABLE1,
+    PAPER_TABLE1_ERRORS,
+    PAPER_TABLE1_PRINTED,
+    format_paper_table1,
+    format_table1,
+    miscalibrated,
+    paper_table1,
+    reproduce_table1,
+)
 from gpo.camera import T265_LIKE
 
 
@@ -15,6 +25,22 @@ def test_the_papers_truth_is_its_measured_squares():
     assert area == pytest.approx(long * short, abs=0.02)  # 3209.139 printed, 3209.123 from the two sides
     for image in ("GPI", "ortho-GPI"):  # the paper's (a + c) / 2 is the long side: near 80 mm, not 40
         assert PAPER_TABLE1[image][0] > 75 and PAPER_TABLE1[image][1] < 45
+
+
+def test_the_papers_printed_table_is_its_numbers():
+    for image in ("GPI", "ortho-GPI"):
+        values = tuple(float(value) for value, _ in PAPER_TABLE1_PRINTED[image])
+        assert values == PAPER_TABLE1[image]
+        computed = abs(PAPER_TABLE1[image][0] - PAPER_TABLE1["truth"][0])
+        assert PAPER_TABLE1_ERRORS[image][0] == pytest.approx(computed, abs=1.5e-3)  # its own rounding: 0.058
+
+
+def test_the_suites_table_is_rounded_to_what_the_measurement_supports():
+    rows = reproduce_table1(placements=[(0.0, 0.0, 0.0), (0.005, -0.005, 2.0)])
+    lines = format_table1(rows).splitlines()
+    assert len(lines) == 4 and lines[0].startswith("image")
+    gpi = lines[1].split()
+    assert gpi[0] == "GPI" and len(gpi[1].split(".")[1]) == 2 and "." not in gpi[5]  # sides in 0.01 mm, area in mm^2
 
 
 def test_miscalibrated_applies_relative_focal_and_absolute_other_errors():
@@ -43,7 +69,8 @@ def test_the_ortho_gpi_corrects_the_gpi_on_a_placement_it_never_saw(table):
 def test_the_format_prints_the_papers_rows_first(table):
     text = format_paper_table1(*table)
     assert text.splitlines()[0].startswith("the paper")
-    assert "84.664 (  4.636)" in text and "3207.881 (  1.258)" in text
+    assert "84.664 (4.636)" in text and "3207.881 (1.258)" in text
+    assert "80.085 (0.058)" in text and "36.660 (3.44)" in text  # the paper's errors as it prints them
     assert text.count("(a+c)/2 mm") == 4 and np.isfinite([row.area_mm2 for row in table[1]]).all()
 
 

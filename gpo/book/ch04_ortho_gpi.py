@@ -12,7 +12,7 @@ import ipywidgets as widgets
 import matplotlib.pyplot as plt
 import numpy as np
 
-from gpo.book.ch04_table1 import CALIBRATION_ERRORS, PAPER_TABLE1, PICK_ERROR_PX, paper_table1
+from gpo.book.ch04_table1 import CALIBRATION_ERRORS, PAPER_TABLE1_ERRORS, PICK_ERROR_PX, paper_table1
 from gpo.book.figures import draw_floor_image
 from gpo.book.panels import slider
 from gpo.ground import (
@@ -209,7 +209,7 @@ def table1_errors_panel(seed: int = 0) -> widgets.VBox:
         "factor": slider("calibration errors x", 1.0, 0.0, 3.0, 0.25),
         "pick_px": slider("corner pick sigma [px]", PICK_ERROR_PX, 0.0, 4.0, 0.5),
     }
-    paper = {image: np.abs(np.subtract(PAPER_TABLE1[image], PAPER_TABLE1["truth"])) for image in ("GPI", "ortho-GPI")}
+    paper = PAPER_TABLE1_ERRORS  # as the paper prints them
 
     def redraw(factor: float, pick_px: float) -> None:
         errors = {name: factor * value for name, value in CALIBRATION_ERRORS.items()}

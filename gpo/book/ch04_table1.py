@@ -126,18 +126,28 @@ def _table1_row(name: str, blocks: list[BlockMeasurement], square: float) -> Tab
     )
 
 
+def _signed(value: float, decimals: int) -> str:
+    """``value`` with its sign at ``decimals`` places; a value that rounds to zero is shown without one."""
+    shown = f"{value:+.{decimals}f}"
+    return f" {shown[1:]}" if float(shown) == 0.0 else shown
+
+
 def format_table1(rows) -> str:
     """Table 1 as rounded text: the means of (a+c)/2 (long sides), (b+d)/2 (short sides) and S with their errors,
-    and a single placement's RMS errors."""
+    and a single placement's RMS errors.
+
+    At the precision the measurement supports: a single placement's sides scatter by a few hundredths of a
+    millimetre and its area by a few mm^2 (the corner detector on a 1 mm-per-pixel image), so the means over the
+    placements are shown to 0.01 mm and 1 mm^2, the RMS errors to two digits."""
     lines = [  # labelled as the paper's Table 1: (a + c) / 2 the long sides, (b + d) / 2 the short ones
-        f"{'image':<10}{'(a+c)/2 mm':>11}{'error':>8}{'(b+d)/2 mm':>12}{'error':>8}{'S mm^2':>9}{'error':>8}"
+        f"{'image':<10}{'(a+c)/2 mm':>11}{'error':>7}{'(b+d)/2 mm':>12}{'error':>7}{'S mm^2':>8}{'error':>6}"
         f"{'single: side rms':>18}{'S rms':>7}"
     ]
     for row in rows:
         lines.append(
-            f"{row.image:<10}{row.long_mm:>11.3f}{row.long_error_mm:>+8.3f}{row.short_mm:>12.3f}"
-            f"{row.short_error_mm:>+8.3f}{row.area_mm2:>9.1f}{row.area_error_mm2:>+8.2f}"
-            f"{row.single_side_rms_mm:>18.3f}{row.single_area_rms_mm2:>7.2f}"
+            f"{row.image:<10}{row.long_mm:>11.2f}{_signed(row.long_error_mm, 2):>7}{row.short_mm:>12.2f}"
+            f"{_signed(row.short_error_mm, 2):>7}{row.area_mm2:>8.0f}{_signed(row.area_error_mm2, 0):>6}"
+            f"{row.single_side_rms_mm:>18.2f}{row.single_area_rms_mm2:>7.1f}"
         )
     return "\n".join(lines)
 
@@ -150,9 +160,26 @@ PAPER_TABLE1 = {
     "ortho-GPI": (80.085, 40.036, 3207.881),
 }
 """The paper's Table 1: (a + c) / 2 mm (the long side), (b + d) / 2 mm (the short side), S mm^2."""
-CALIBRATION_ERRORS = {"fx": -0.00087, "fy": -0.00162, "cx": -0.722, "cy": 0.172, "alpha": 0.001, "beta": -0.006}
-"""The calibration's errors: fx, fy relative, cx, cy pixels, alpha, beta absolute; those of chapter
-``01_eucm_calibration``'s calibration from views with 0.3 px of corner noise."""
+PAPER_TABLE1_PRINTED = {
+    "truth": ("4 x 20.007", "2 x 20.050", "3209.139"),
+    "GPI": (("84.664", "4.636"), ("36.660", "3.44"), ("3127.102", "82.037")),
+    "ortho-GPI": (("80.085", "0.058"), ("40.036", "0.064"), ("3207.881", "1.258")),
+}
+"""The paper's Table 1 as it prints it: the truth, and each image's value and (error). The errors are the paper's
+own: its (a + c) / 2 error for the ortho-GPI is 0.058, where 80.085 - 4 x 20.007 gives 0.057."""
+PAPER_TABLE1_ERRORS = {
+    image: tuple(float(error) for _, error in PAPER_TABLE1_PRINTED[image]) for image in ("GPI", "ortho-GPI")
+}
+"""The paper's errors as it prints them, (a + c) / 2 mm, (b + d) / 2 mm, S mm^2, per image."""
+SIDE_DECIMALS = {"GPI": 1, "ortho-GPI": 2}
+"""Decimals (mm) of each image's sides in ``format_paper_table1``: what one frame's measurement supports. The
+ortho-GPI's sides scatter by a few hundredths of a millimetre from frame to frame (the corner detector on a 1 mm per
+pixel image); the GPI's are off by tenths of a millimetre to millimetres, and scatter by more than a tenth."""
+AREA_DECIMALS = 0
+"""Decimals (mm^2) of the area in ``format_paper_table1``: one frame's area scatters by a few mm^2."""
+CALIBRATION_ERRORS = {"fx": -0.00088, "fy": -0.00163, "cx": -0.724, "cy": 0.168, "alpha": 0.001, "beta": -0.006}
+"""The calibration's errors: fx, fy relative, cx, cy pixels, alpha, beta absolute; those chapter
+``01_eucm_calibration`` prints for its calibration from views with 0.3 px of corner noise."""
 PICK_ERROR_PX = 2.0
 """Standard deviation (pixels, each coordinate, seeded) of the four corners picked by hand in the front face for
 eq. 22, as the paper selects them."""
@@ -230,26 +257,31 @@ def paper_table1(
 
 
 def format_paper_table1(truth, rows) -> str:
-    """The paper's Table 1 as rounded text, the paper's own first: value (error) per measurement and image."""
+    """The paper's Table 1 as text, the paper's own first, as it prints it; then the suite's rows, value (error) per
+    measurement and image, at the precision one frame's measurement supports (``SIDE_DECIMALS``,
+    ``AREA_DECIMALS``)."""
     wheres = {
-        "paper": "the paper (its board, one frame)",
         "fitted": "one frame, the placement the homographies were fitted to",
         "second": "one frame, a second placement",
         "mean": "mean over placements",
     }
     labels = ("(a+c)/2 mm", "(b+d)/2 mm", "S mm^2")
-    lines = []
+    columns = (("GPI", 20), ("ortho-GPI", 22))  # each image's column and its width
+    header = f"  {'measurement':<12}{'truth':>12}{'GPI (error)':>20}{'ortho-GPI (error)':>22}"
+    lines = ["the paper (its board, one frame), as its Table 1 prints it:", header]
+    for k, label in enumerate(labels):
+        cells = "".join(f"{'{} ({})'.format(*PAPER_TABLE1_PRINTED[image][k]):>{width}}" for image, width in columns)
+        lines.append(f"  {label:<12}{PAPER_TABLE1_PRINTED['truth'][k]:>12}{cells}")
     for where, title in wheres.items():
-        if where == "paper":
-            known, values = PAPER_TABLE1["truth"], {image: PAPER_TABLE1[image] for image in ("GPI", "ortho-GPI")}
-        elif not any(row.where == where for row in rows):
+        values = {row.image: (row.long_mm, row.short_mm, row.area_mm2) for row in rows if row.where == where}
+        if not values:
             continue
-        else:
-            known = truth
-            values = {row.image: (row.long_mm, row.short_mm, row.area_mm2) for row in rows if row.where == where}
-        lines.append(f"{title}:")
-        lines.append(f"  {'measurement':<12}{'truth':>10}{'GPI (error)':>22}{'ortho-GPI (error)':>22}")
+        lines += [f"{title}:", header]
         for k, label in enumerate(labels):
-            cells = "".join(f"{values[image][k]:>12.3f} ({abs(values[image][k] - known[k]):7.3f})" for image in values)
-            lines.append(f"  {label:<12}{known[k]:>10.3f}{cells}")
+            cells = ""
+            for image, width in columns:
+                decimals = AREA_DECIMALS if k == 2 else SIDE_DECIMALS[image]
+                value, error = values[image][k], abs(values[image][k] - truth[k])
+                cells += f"{f'{value:.{decimals}f} ({error:.{decimals}f})':>{width}}"
+            lines.append(f"  {label:<12}{truth[k]:>12g}{cells}")
     return "\n".join(lines)
