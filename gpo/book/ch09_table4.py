@@ -6,8 +6,9 @@ method, the exact arc (``gpo-exact``) and the rigid fit (``gpo-rigid``) on both 
 ortho-GPI, and the second paper's floor feature odometer (``features``) on the ortho-GPI.
 Columns: the paths ``long1``-``long3`` (``PATHS``: a loop, S-curves with a U-turn, stop-and-go; 15.3-16.0 m) and
 their mean. The first paper's number is its "translation error": the final position error after placing the first
-pose on the truth (``gpo.metrics.translation_error``); its abstract's headline (0.058 m) is the *mean* localization
-error over each test, averaged (``Table4.format_mean``).
+pose on the truth (``gpo.metrics.translation_error``). The headline of its introduction, 0.058 m of "mean localization
+error" for the EKF, is that error averaged over its three tests (its Table 4: 0.0579 m); ``Table4.format_mean`` prints
+beside it the other reading of the words, the mean position error along each path.
 
 Both chessboard routes are calibrated on one frame of ``FLOOR_BOARDS["t265"]`` (``gpo.book.runs.route_config``), as
 chapter 04 does. Each floor run is kept on disk (``gpo.book.runs.floor_run``), so that ``python -m gpo table4``
@@ -81,8 +82,9 @@ class Table4:
         return np.array([[self.evaluations[row][path].final.position_m for path in self.paths] for row in self.rows])
 
     def mean_errors_m(self) -> np.ndarray:
-        """(rows, paths) the first paper's headline measure, the mean localization error: the mean position error
-        over the path (the APE's mean) after placing the first pose on the truth, metres."""
+        """(rows, paths) the mean localization error along each path: the mean position error over the path (the
+        APE's mean) after placing the first pose on the truth, metres. (The first paper's 0.058 m is its Table 4's
+        average translation error; this is the other reading of its words.)"""
         return np.array([[float(self.evaluations[row][path].ape_m.mean) for path in self.paths] for row in self.rows])
 
     def format_mean(self) -> str:
