@@ -48,15 +48,18 @@ def test_each_row_holds_the_final_error_of_the_run_made_here(sample, table):
     bag, truth, tracking = sample
     floor = floor_run(bag, route_config("gpo-exact", "analytic"), cache=False)  # computed now, not read back
     fused = fuse(floor.trajectory, floor.inliers, tracking, load_config().fusion, floor.spread_px).trajectory
+    # The table's floor run is a kept one, which make test's runs on other floating-point paths (.ci/fp-path) read
+    # from the machine's own path: there the two differ by 1 micrometre and 4.5 microradians on this path of 3.26 m
+    # (OpenCV's SIMD width moves the tracks in their last bits); a row mixed up with another is millimetres off.
     for row, estimate in ((CAMERA, tracking), (FLOOR, floor.trajectory), (FUSED, fused)):
         expected, found = final_error(estimate, truth), table.evaluations[row]["sample"].final
-        assert found.position_m == pytest.approx(expected.position_m, abs=1e-9), row.label
-        assert found.heading_rad == pytest.approx(expected.heading_rad, abs=1e-9), row.label
+        assert found.position_m == pytest.approx(expected.position_m, abs=1e-5), row.label
+        assert found.heading_rad == pytest.approx(expected.heading_rad, abs=1e-5), row.label
         assert found.distance_m == pytest.approx(expected.distance_m, abs=1e-12), row.label
         assert found.poses == expected.poses, row.label
     metres = table.translation_errors_m()
     assert metres.shape == (3, 1)
-    assert metres[1, 0] == pytest.approx(final_error(floor.trajectory, truth).position_m, abs=1e-9)
+    assert metres[1, 0] == pytest.approx(final_error(floor.trajectory, truth).position_m, abs=1e-5)
 
 
 def test_the_floor_rows_final_error_by_hand(sample, table):
