@@ -74,7 +74,8 @@ FP_CHECKS := notebooks tests/test_calibrate.py tests/test_calibrate_models.py te
 PYTEST := $(BIN)/python -m pytest -p no:cacheprovider -n 2 --dist loadfile
 
 # two workers (pytest-xdist), each test file on one of them: a notebook's cells share one kernel; the log lists the
-# 25 slowest tests, where the time goes
+# 25 slowest tests, where the time goes. Then the other paths, one after the other (run side by side, the three
+# phases take 10 min 31 s where one after the other they take 10 min 10 s)
 test: $(STAMP) $(CHROMIUM) recordings tables wheel
 	$(BIN)/ruff check .
 	$(PHASE) pytest $(PYTEST) --durations=25
