@@ -66,11 +66,12 @@ wheel: recordings
 	$(PHASE) wheel .ci/wheel $(BIN)/uv $(PYTHON)
 
 # the checks whose printed numbers a floating-point path could change run again on two other paths of this machine
-# (.ci/fp-path: avx2, then sse4): every chapter under nbval, and the calibration, mount, fusion and papers' tables
-# tests. They read the recordings and kept runs that the machine's own path made (cache keys do not depend on the path)
+# (.ci/fp-path: avx2, then sse4): every chapter under nbval (the mounts chapters 01 and 10 measure among them), and the
+# calibration, fusion and papers' tables tests. They read the recordings and kept runs that the machine's own path made
+# (cache keys do not depend on the path)
 FP_CHECKS := notebooks tests/test_calibrate.py tests/test_calibrate_models.py tests/test_camera_fit.py \
-	tests/test_mount.py tests/test_fusion.py tests/test_fusion_pipeline.py tests/test_table1.py \
-	tests/test_table3_metric.py tests/test_table4.py tests/test_paper_table2.py tests/test_paper_equations.py
+	tests/test_fusion.py tests/test_fusion_pipeline.py tests/test_table1.py tests/test_table3_metric.py \
+	tests/test_table4.py tests/test_paper_table2.py tests/test_paper_equations.py
 PYTEST := $(BIN)/python -m pytest -p no:cacheprovider -n 2 --dist loadfile
 
 # two workers (pytest-xdist), each test file on one of them: a notebook's cells share one kernel; the log lists the
