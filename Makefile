@@ -54,8 +54,8 @@ recordings: $(STAMP)
 # Table 4's floor runs (chapter 09 reads them), the second paper's experiments I-VIII and chapter 08's floor runs,
 # kept in the cache: seven jobs of a minute or two, longest first, two at a time (experiment IX, 80 m, is left to
 # benchmarks/second_paper.py)
-TABLE_JOBS := "gpo.book.ch08_table2 I" "gpo.book.ch08_table2 II" "gpo table4 long3" "gpo table4 long1" \
-	"gpo table4 long2" "gpo.book.ch08_table2 IV V VI VII VIII" "gpo.book.ch08_table2 floors"
+TABLE_JOBS := "gpo table2 I" "gpo table2 II" "gpo table4 long3" "gpo table4 long1" \
+	"gpo table4 long2" "gpo table2 IV V VI VII VIII" "gpo table2 floors"
 tables: recordings
 	$(PHASE) tables sh -c 'printf "%s\n" $(TABLE_JOBS) | xargs -P 2 -L 1 $(BIN)/python -m > /dev/null'
 

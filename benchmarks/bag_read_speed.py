@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gpo.bag import BagWriter, Recording
+from gpo.io.bag import BagWriter, Recording
 
 HEIGHT, WIDTH = 800, 848
 PERIOD_NS = 33_333_333  # 30 Hz

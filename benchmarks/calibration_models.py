@@ -13,9 +13,9 @@ import time
 
 import cv2
 
-from gpo.calibrate import MODELS, calibrate_corners, find_corners
-from gpo.datasets import boofcv_fisheye_chessboard
-from gpo.targets import Chessboard
+from gpo.cameras.calibrate import MODELS, calibrate_corners, find_corners
+from gpo.cameras.targets import Chessboard
+from gpo.io.datasets import boofcv_fisheye_chessboard
 
 BOARD = Chessboard((7, 5), 1.0)
 SIZE = (640, 720)

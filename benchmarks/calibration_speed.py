@@ -13,7 +13,7 @@ import timeit
 
 import numpy as np
 
-from gpo.calibrate import calibrate_corners, calibrate_views, find_corners, initial_eucm
+from gpo.cameras.calibrate import calibrate_corners, calibrate_views, find_corners, initial_eucm
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_poses, board_views
 from gpo.sim.rigs import downward_rig, t265_rig
 

@@ -8,7 +8,7 @@ Prints the best of N runs in milliseconds per full image and in megapixels per s
 import argparse
 import timeit
 
-from gpo.camera import T265_LIKE, Pinhole
+from gpo.cameras import T265_LIKE, Pinhole
 
 DOWNWARD = Pinhole(fx=600.0, fy=600.0, cx=376.0, cy=240.0, dist=(-0.28, 0.09, 1e-3, -8e-4), width=752, height=480)
 

@@ -13,9 +13,9 @@ import timeit
 import cv2
 import numpy as np
 
-from gpo import cubemap
-from gpo.camera import T265_LIKE
-from gpo.cubemap import FACE_NAMES, Cubemap
+from gpo.cameras import T265_LIKE
+from gpo.floor_image import cubemap
+from gpo.floor_image.cubemap import FACE_NAMES, Cubemap
 
 
 def build_tables(face_size: int | None) -> None:

@@ -22,14 +22,15 @@ import json
 import tempfile
 from pathlib import Path
 
-from gpo.batch import Run, add_cluster_arguments, cluster_client, sweep
-from gpo.outputs import write_json
+from gpo.batch.cluster import add_cluster_arguments, cluster_client
+from gpo.batch.runs import Run
+from gpo.batch.sweep import sweep
+from gpo.io.outputs import write_json
 from gpo.sim.population import render
 
 CONFIG = Path(__file__).resolve().parents[1] / "gpo" / "configs" / "sim_downward.yaml"
 VARIANTS = {  # name -> the fields of the config's features section that differ from the shipped config's
-    "default": {},
-    "paper's fit (no refit)": {"refit_px": 0.0},
+    "default": {}, "paper's fit (no refit)": {"refit_px": 0.0},
     "SIFT full image": {"scale": 1.0, "roi": None},
     "SIFT scale 0.5, no roi": {"roi": None},
     "ORB full image": {"detector": "orb", "scale": 1.0, "roi": None, "max_features": 500},

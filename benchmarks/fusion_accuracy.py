@@ -4,8 +4,8 @@
                                          [--write benchmarks/results/fusion_accuracy.json]
 
 CPU is the scarce thing, so each path's floor odometry (``gpo-exact`` on the analytic floor image, the shipped
-config) is computed once (``gpo.book.runs.floor_run``, kept on disk) and reused for every seed: the tracking
-camera's drift acts on its own stream only (``gpo.sim.motion.tracking_odometry``), so a new drift is a new stream,
+config) is computed once (``gpo.experiments.runs.floor_run``, kept on disk) and reused for every seed: the tracking
+camera's drift acts on its own stream only (``gpo.sim.drift.tracking_odometry``), so a new drift is a new stream,
 not a new rendering. Seed k draws the drift's scale error uniformly in +-3 % and its yaw bias in +-2 mrad/s (the
 random walks and jitter those of ``T265_DRIFT``), and the stream is seeded by k.
 
@@ -25,12 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-from gpo.book.runs import drifted_tracking, floor_run, route_config
+from gpo.experiments.runs import drifted_tracking, floor_run, route_config
 from gpo.fusion import fuse
+from gpo.io.outputs import write_json
 from gpo.metrics import evaluate
-from gpo.outputs import write_json
-from gpo.pipeline import load_config
-from gpo.sim.motion import T265_DRIFT, TrackingDrift, named_plan
+from gpo.pipeline.config import load_config
+from gpo.sim.drift import T265_DRIFT, TrackingDrift
+from gpo.sim.paths import named_plan
 from gpo.sim.record import PRESETS, START_NS, recording
 
 RATIO_TARGET, EXCESS_TARGET_PERCENT, OUTAGE_TARGET_PERCENT, FUSE_TARGET_S = 1.1, 0.02, 0.3, 0.6

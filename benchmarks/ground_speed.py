@@ -21,7 +21,8 @@ import timeit
 import cv2
 import numpy as np
 
-from gpo.ground import FloorImage, chessboard_route
+from gpo.floor_image.image import FloorImage
+from gpo.floor_image.ortho import chessboard_route
 from gpo.sim.record import FLOOR_BOARDS, floor_board_image
 from gpo.sim.rigs import t265_rig
 

@@ -19,11 +19,14 @@ import math
 import tempfile
 from pathlib import Path
 
-from gpo.bag import Recording
-from gpo.batch import Run, add_cluster_arguments, cluster_client, sweep
+from gpo.batch.cluster import add_cluster_arguments, cluster_client
+from gpo.batch.runs import Run
+from gpo.batch.sweep import sweep
+from gpo.io.bag import Recording
+from gpo.io.outputs import write_json
 from gpo.metrics import final_error
-from gpo.outputs import write_json
-from gpo.pipeline import METHODS, load_config, tracking_path
+from gpo.pipeline.config import METHODS, load_config
+from gpo.pipeline.run import tracking_path
 from gpo.sim.population import render
 from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS
 

@@ -24,8 +24,10 @@ from pathlib import Path
 
 import cv2
 
-from gpo.bag import BagWriter, Recording
-from gpo.pipeline import FloorOdometer, load_config, run
+from gpo.io.bag import BagWriter, Recording
+from gpo.pipeline.config import load_config
+from gpo.pipeline.odometer import FloorOdometer
+from gpo.pipeline.run import run
 from gpo.sim.record import recording
 
 

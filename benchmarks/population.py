@@ -9,7 +9,7 @@ family at any height 0.08-0.30 m, pitch 0-15 degrees, roll +-2 degrees and lever
 tracking camera; half downward pinhole cameras of other lenses, heights, tilts and places; floors of every kind,
 mixed and of other grains; 2.5-3.5 m paths, so that a shared 2-core machine renders them in time, with reverse
 legs, spins on the spot, and slides for the downward camera's omnidirectional robot) are rendered on a Dask
-cluster (``gpo.sim.population.render_draws``; cached) and swept with ``gpo.batch.sweep`` (resumable in
+cluster (``gpo.sim.population.render_draws``; cached) and swept with ``gpo.batch.sweep.sweep`` (resumable in
 ``--out``): ``gpo``, ``gpo-exact`` and ``gpo-rigid`` on the fisheye rigs (and
 ``fused``, with ``--fused``), ``features`` on the downward ones.
 
@@ -23,9 +23,9 @@ Printed and written: per method the final position error in % of the distance (m
 issue's targets (p90 at most 0.3 % for gpo-exact, 0.5 % for gpo-rigid, 0.3 % for features; ``gpo`` and
 ``fused`` have none), and every run over its method's target (for ``gpo``: over 1 %) or not finished, with its
 draw and what the run's summary says of it: frames coasted, held and skipped, the flags by reason, and the measured
-frames whose flow held a slower layer of vectors (``gpo.flow``: the reflections of a glossy floor, which pull the
+frames whose flow held a slower layer of vectors (``gpo.motion.klt``: the reflections of a glossy floor, which pull the
 median short without failing any check); for ``gpo``, whether the path holds a leg the paper's bicycle reads wrong
-(reverse driving read as forward, a spin's sense flipping: ``gpo.kinematics``, chapter 06).
+(reverse driving read as forward, a spin's sense flipping: ``gpo.odometry.kinematics``, chapter 06).
 
 ``--matte`` runs the same draws with every floor matte (``gpo.sim.population.matte``: the same rigs, paths, drifts
 and textures, without the glossy screed's reflections of the ceiling lamps), so that what the reflections cost each
@@ -43,10 +43,12 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from gpo import cache
-from gpo.batch import Run, add_cluster_arguments, cluster_client, sweep
-from gpo.calibfiles import camera_to_kalibr
-from gpo.pipeline import load_config
+from gpo.batch.cluster import add_cluster_arguments, cluster_client
+from gpo.batch.runs import Run
+from gpo.batch.sweep import sweep
+from gpo.cameras.files import camera_to_kalibr
+from gpo.io import cache
+from gpo.pipeline.config import load_config
 from gpo.sim.floors import FLOOR_KINDS
 from gpo.sim.population import Draw, draw, matte, render_draws
 
@@ -87,7 +89,7 @@ def adapted(chosen: Draw) -> dict:
 
 def _whole_pixels(edges: list[float], step: float) -> list[float]:
     """(low, high) metres a whole number of ``step`` pixels apart, keeping ``high`` (as the floor image keeps its
-    far-left corner: ``gpo.ground.FloorImage.top_view``)."""
+    far-left corner: ``gpo.floor_image.image.FloorImage.top_view``)."""
     high = round(float(edges[1]), 6)
     return [round(high - round((high - edges[0]) / step) * step, 9), high]
 
@@ -117,8 +119,8 @@ def distribution(errors: pd.Series) -> dict:
 
 def explanation(row: pd.Series, out: Path) -> dict:
     """What a run's summary (in the sweep folder ``out``) says of it: its status, error, flags by reason, frames not
-    measured, measured frames whose flow held a slower layer (``gpo.flow``: reflections on a glossy floor), and the
-    distance it measured over the distance driven."""
+    measured, measured frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor), and
+    the distance it measured over the distance driven."""
     flags = json.loads(row["flags"]) if isinstance(row.get("flags"), str) else {}
     frames = {
         name: int(row[f"frames_{name}"])

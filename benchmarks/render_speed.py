@@ -97,9 +97,10 @@ def unpack(revision: str, folder: Path) -> Path:
 
 def odometry(bag: str, rig: str) -> tuple[np.ndarray, dict]:
     """This tree's odometry of ``bag`` with the rig's shipped config: positions (N, 2) and the final error."""
-    from gpo.bag import Recording
+    from gpo.io.bag import Recording
     from gpo.metrics import final_error
-    from gpo.pipeline import load_config, run
+    from gpo.pipeline.config import load_config
+    from gpo.pipeline.run import run
     from gpo.sim.record import GROUND_TRUTH_TOPIC
 
     result = run(bag, load_config(CONFIGS[rig]), progress=False)
@@ -186,7 +187,7 @@ def main() -> None:
                     f"{apart * 1e3:>14.1f}  {'within' if within else 'NOT within'} {TOLERANCE_PERCENT} %"
                 )
     if args.write:
-        from gpo.outputs import write_json  # here: a worker's gpo is another revision's
+        from gpo.io.outputs import write_json  # here: a worker's gpo is another revision's
 
         print(f"wrote {write_json(args.write, results)}")
 

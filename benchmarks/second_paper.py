@@ -4,8 +4,8 @@
                                       [--write benchmarks/results/second_paper.json]
 
 Each experiment's recording (``paper2-i`` ... ``paper2-ix``) is rendered on first use and cached; the runs of the
-pipeline as published (the shipped config without the refit) and as shipped are those of ``gpo.book.ch08_table2``, kept
-on disk (``--no-cache`` computes them again, which takes minutes: IX alone is 6400 frames). Every column is the
+pipeline as published (the shipped config without the refit) and as shipped are those of ``gpo.experiments.table2``,
+kept on disk (``--no-cache`` computes them again, which takes minutes: IX alone is 6400 frames). Every column is the
 paper's, under its definitions (``gpo.metrics.paper_table2``). The rate is the run's, reading the bag included, with
 ``--threads`` OpenCV threads (when computed here).
 
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import cv2
 
-from gpo.book.ch08_table2 import EXPERIMENTS, HEADER, experiment, format_row, reproduce_table2
-from gpo.outputs import write_json
+from gpo.experiments.table2 import EXPERIMENTS, HEADER, experiment, format_row, reproduce_table2
+from gpo.io.outputs import write_json
 
 TARGETS = {("shipped", "I"): 0.2, ("shipped", "II"): 0.2, ("shipped", "IX"): 0.5}  # final error, % of distance
 PAPER = {"I-II": 0.21, "IX": 0.94, "heading_rmse_deg": (1.4, 2.3)}

@@ -5,8 +5,8 @@
 
 24 runs of one recording (``--preset``, rendered on first use and cached): the KLT window (15, 21, 31 px) x the
 method (gpo, gpo-exact, gpo-rigid, fused) x the motion vector (median, mean). First one after another in this
-process, each exactly as a worker makes it (``gpo.batch.execute``), with OpenCV's own threads (as a loop in a
-notebook runs them) and again on one thread (as each worker runs); then as one ``gpo.batch.sweep`` on a local
+process, each exactly as a worker makes it (``gpo.batch.runs.execute``), with OpenCV's own threads (as a loop in a
+notebook runs them) and again on one thread (as each worker runs); then as one ``gpo.batch.sweep.sweep`` on a local
 cluster of ``--workers`` processes (default one per core), into a new folder. The three are measured ``--repeats``
 times, interleaved, on one cluster; the times printed are their medians. Printed: the wall times and the speed-up
 (target at least 1.8 on 2 cores over the loop with OpenCV's threads, the cluster's start not counted; its start is
@@ -32,9 +32,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gpo.batch import Run, cluster_client, code_version, configured, execute, recording_digest, run_key, sweep
-from gpo.outputs import write_json
-from gpo.pipeline import config_to_dict
+from gpo.batch.cluster import cluster_client
+from gpo.batch.runs import Run, code_version, configured, execute, recording_digest, run_key
+from gpo.batch.sweep import sweep
+from gpo.io.outputs import write_json
+from gpo.pipeline.config import config_to_dict
 from gpo.sim.record import recording
 
 GRID = {
@@ -122,7 +124,7 @@ def main() -> None:
 
 def _one_after_another(runs: list[Run], threads: int) -> tuple[float, dict[str, dict]]:
     """The runs one after another in this process with OpenCV on ``threads`` threads, each exactly as a worker
-    makes it (``gpo.batch.execute``): the wall time, seconds, and each run's row by its key."""
+    makes it (``gpo.batch.runs.execute``): the wall time, seconds, and each run's row by its key."""
     cv2.setNumThreads(threads)
     started = time.perf_counter()
     digest, version = recording_digest(runs[0].recording), code_version()

@@ -25,14 +25,14 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from gpo.__main__ import main
-from gpo.bag import Recording
-from gpo.calibfiles import camera_to_kalibr
+from gpo.cameras.files import camera_to_kalibr
+from gpo.cli import main
+from gpo.io.bag import Recording
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import final_error
-from gpo.pipeline import DEFAULT_CONFIG, config_to_dict, load_config
+from gpo.pipeline.config import DEFAULT_CONFIG, config_to_dict, load_config
 from gpo.sim.realsense import RIGS, realsense_recording
 from gpo.sim.record import GROUND_TRUTH_TOPIC
-from gpo.trajectory import Trajectory
 
 TARGET_RATIO = 1.5
 FLOOR_MM = 0.5  # final errors below this are within the simulated floor's own noise over these paths

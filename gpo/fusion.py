@@ -4,11 +4,11 @@ State (``STATE``): x, y (m) and heading theta (rad) of base_link in the odometry
 and yaw rate omega (rad/s), and two **biases** of the calibrated source (the tracking camera): its ``scale`` error
 (its distances are 1 + scale times the true ones) and its ``yaw_bias`` (rad/s added to every turn rate). Process
 model: v and omega stay constant over a step, driven by white acceleration noise (``ProcessNoise``); the pose moves
-along the exact arc they describe (``gpo.kinematics.arc_increment``), the covariance through the Jacobian of that
-motion; the biases are random walks (``BiasModel``).
+along the exact arc they describe (``gpo.odometry.kinematics.arc_increment``), the covariance through the Jacobian of
+that motion; the biases are random walks (``BiasModel``).
 
 Every source is used **differentially**, like robot_localization's differential mode: only a source's pose
-increments count (already turned into base_link: ``gpo.trajectory.base_from_sensor_odometry``), never its absolute
+increments count (already turned into base_link: ``gpo.io.trajectory.base_from_sensor_odometry``), never its absolute
 pose, which drifts. An increment over [t0, t1] is a measurement of the filter's own motion between those times: the
 filter keeps a copy of its pose at t0 for each source (stochastic cloning, Roumeliotis and Burdick 2002), and the
 measurement is the forward part and the turn of ``between(clone, pose)`` (``MEASURED``), with the covariance the
@@ -38,8 +38,8 @@ import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 from scipy.linalg.lapack import dpotrf
 
-from gpo.kinematics import arc_increment, between
-from gpo.trajectory import Trajectory
+from gpo.io.trajectory import Trajectory
+from gpo.odometry.kinematics import arc_increment, between
 
 STATE = ("x", "y", "theta", "v", "omega", "scale", "yaw_bias")
 MOTION = 5  # the state's motion part: x, y, theta, v, omega
@@ -117,7 +117,8 @@ def tracking_increment_covariance(position_walk_m_per_sqrt_s: float, yaw_walk_ra
 
 
 def increment_jacobians(clone: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The derivatives (3, 3) of ``gpo.kinematics.between(clone, pose)`` with respect to ``clone`` and to ``pose``
+    """The derivatives (3, 3) of ``gpo.odometry.kinematics.between(clone, pose)`` with respect to ``clone`` and to
+    ``pose``
     (each x, y, theta)."""
     cos, sin = math.cos(clone[2]), math.sin(clone[2])
     dx, dy = pose[0] - clone[0], pose[1] - clone[1]
@@ -417,7 +418,7 @@ def fuse(
     ``floor``: the floor odometry's base_link poses; ``inliers`` (N,): the flow's inlier vectors behind the step into
     each pose, 0 where the step was not measured (coasted and held steps are not fused); ``spread_px`` (N,), when
     known: their spread (``FusionSettings``; NaN counts as the reference). ``tracking``: the tracking camera's
-    odometry already turned into base_link poses (``gpo.trajectory.base_from_sensor_odometry``); only its increments
+    odometry already turned into base_link poses (``gpo.io.trajectory.base_from_sensor_odometry``); only its increments
     are used, rate-matched to the floor: its poses at the floor's frames (the last one at or before each). Poses
     that are not finite are dropped, each source's poses are taken in the order of their stamps (a repeated stamp
     once), a tracking step longer than ``tracking_max_gap_s`` is not fused; all counted in ``dropped``.

@@ -1,6 +1,6 @@
 """How far an estimated trajectory is from the truth, with evo doing the association, the alignment and the errors.
 
-Trajectories are ``gpo.trajectory.Trajectory`` objects (base_link in some world frame, integer-nanosecond stamps) or
+Trajectories are ``gpo.io.trajectory.Trajectory`` objects (base_link in some world frame, integer-nanosecond stamps) or
 evo ``PoseTrajectory3D`` objects (float-second stamps); ``to_evo`` turns the first into the second and ``from_evo``
 back. Each function first associates the two by time (``associate``: evo's ``sync``, nearest stamps within
 ``MAX_STAMP_DIFFERENCE_S``), then moves the estimate onto the truth (``Alignment``) and expresses every error in the
@@ -56,7 +56,7 @@ import numpy as np
 from evo.core import filters, geometry, lie_algebra, metrics, sync
 from evo.core.trajectory import PoseTrajectory3D
 
-from gpo.trajectory import Trajectory
+from gpo.io.trajectory import Trajectory
 
 MAX_STAMP_DIFFERENCE_S = 0.005  # poses further apart in time than this are not associated
 MIN_POSES = 2  # associated poses needed for any error

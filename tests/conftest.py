@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
-from gpo import datasets
+from gpo.io import datasets
 
 settings.register_profile("gpo", derandomize=True, max_examples=200, deadline=None, print_blob=True)
 settings.load_profile("gpo")
@@ -14,7 +14,7 @@ settings.load_profile("gpo")
 
 @pytest.fixture
 def fetch_or_skip() -> Callable[[str], Path]:
-    """`gpo.datasets.fetch`, skipping the test, with the reason, when the file cannot be had."""
+    """`gpo.io.datasets.fetch`, skipping the test, with the reason, when the file cannot be had."""
 
     def fetch(name: str) -> Path:
         try:

@@ -24,12 +24,13 @@ import numpy as np
 import pytest
 import yaml
 
-import gpo.calibrate
-import gpo.pipeline
-from gpo.__main__ import main
-from gpo.bag import COMPRESSED_IMAGE, IMAGE, BagWriter, Recording
-from gpo.camera import T265_LIKE
-from gpo.trajectory import Trajectory
+import gpo.cli.calibrate
+import gpo.pipeline.odometer
+import gpo.pipeline.run
+from gpo.cameras import T265_LIKE
+from gpo.cli import main
+from gpo.io.bag import COMPRESSED_IMAGE, IMAGE, BagWriter, Recording
+from gpo.io.trajectory import Trajectory
 
 IMAGE_TOPIC = "/camera/fisheye1/image_raw"
 ODOMETRY_TOPIC = "/camera/odom/sample"
@@ -435,7 +436,7 @@ def test_frames_that_cannot_be_measured_are_flagged(world, tmp_path, capsys, nam
     ],
 )
 def test_fused_checks_its_second_source_before_the_first_frame(world, tmp_path, capsys, monkeypatch, name, words):
-    monkeypatch.setattr(gpo.pipeline, "odometry", lambda *a, **k: pytest.fail("frames were read"))
+    monkeypatch.setattr(gpo.pipeline.run, "odometry", lambda *a, **k: pytest.fail("frames were read"))
     check(capsys, [world.root, tmp_path], ["run", world.bag(name), "--config", world.config, "--method", "fused",
                                            "--out", tmp_path / "t.tum"], 1, *words)
     assert not (tmp_path / "t.tum").exists()
@@ -452,7 +453,7 @@ def test_a_fusion_that_fails_late_still_writes_the_floor_odometry(world, tmp_pat
     def failing(*args, **kwargs):
         raise ValueError("the filter diverged")
 
-    monkeypatch.setattr(gpo.pipeline, "fuse", failing)
+    monkeypatch.setattr(gpo.pipeline.run, "fuse", failing)
     out = tmp_path / "t.tum"
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--method", "fused", "--out",
                                            out], 1, "the floor odometry is the result: the filter diverged")
@@ -502,11 +503,11 @@ def test_ctrl_c_keeps_the_frames_done(world, tmp_path, capsys, monkeypatch, done
 
 SLOW_MAIN = """
 import sys, time
-import gpo.pipeline
-step = gpo.pipeline.FloorOdometer.step
-gpo.pipeline.FloorOdometer.step = lambda self, *args: (time.sleep(0.25), step(self, *args))[1]
-from gpo.__main__ import main
-sys.exit(main(sys.argv[1:]))
+import gpo.pipeline.odometer
+import gpo.pipeline.run
+step = gpo.pipeline.odometer.FloorOdometer.step
+gpo.pipeline.odometer.FloorOdometer.step = lambda self, *args: (time.sleep(0.25), step(self, *args))[1]
+from gpo.cli import main sys.exit(main(sys.argv[1:]))
 """
 
 
@@ -796,7 +797,7 @@ def test_calibrate_names_what_is_wrong_with_the_views(tmp_path, capsys, views, b
 def test_calibrate_checks_its_options_before_working(tmp_path, capsys, monkeypatch, arguments, code, words):
     paths = _images(tmp_path, [board_image(seed=0)])
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(gpo.calibrate, "calibrate_images", lambda *a, **k: pytest.fail("calibrated"))
+    monkeypatch.setattr(gpo.cli.calibrate, "calibrate_images", lambda *a, **k: pytest.fail("calibrated"))
     options = {"--board": "7x5", "--square": "0.03", **dict(zip(arguments[::2], arguments[1::2], strict=True))}
     argv = ["calibrate", *paths, *[item for pair in options.items() for item in pair]]
     check(capsys, [tmp_path], argv, code, *words)
@@ -814,7 +815,7 @@ def test_a_bad_fit_never_replaces_a_good_calibration(tmp_path, capsys, monkeypat
     paths = _images(tmp_path, [board_image(seed=0)])
     good = tmp_path / "calib.yaml"
     good.write_text("cam0: {camera_model: eucm}  # the good one\n")
-    monkeypatch.setattr(gpo.calibrate, "calibrate_images", _fit(ok=False))
+    monkeypatch.setattr(gpo.cli.calibrate, "calibrate_images", _fit(ok=False))
     check(capsys, [tmp_path], ["calibrate", *paths, "--board", "7x5", "--square", "0.03", "--out", good], 1,
           "NOT A GOOD CALIBRATION", f"{good} is kept", "calib.flagged.yaml")
     assert "camera_model: eucm" in (tmp_path / "calib.flagged.yaml").read_text()
@@ -825,7 +826,7 @@ def test_force_and_a_good_fit_replace_the_calibration(tmp_path, capsys, monkeypa
     old = tmp_path / "calib.yaml"
     for ok, extra in ((False, ["--force"]), (True, [])):
         old.write_text("cam0: {}\n")
-        monkeypatch.setattr(gpo.calibrate, "calibrate_images", _fit(ok=ok))
+        monkeypatch.setattr(gpo.cli.calibrate, "calibrate_images", _fit(ok=ok))
         check(capsys, [tmp_path], ["calibrate", *paths, "--board", "7x5", "--square", "0.03", "--out", old, *extra],
               0 if ok else 1, f"wrote {old}", changed=[old])
         assert "intrinsics" in old.read_text()
@@ -877,6 +878,6 @@ def test_an_unexpected_error_is_one_line_and_points_to_debug(world, tmp_path, ca
     def broken(*args, **kwargs):
         raise MemoryError("out of memory")
 
-    monkeypatch.setattr(gpo.pipeline, "odometry", broken)
+    monkeypatch.setattr(gpo.pipeline.run, "odometry", broken)
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum"],
           1, "error: MemoryError: out of memory", "--debug")

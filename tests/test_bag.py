@@ -19,9 +19,9 @@ from rosbags.interfaces import QosDurability
 from rosbags.typesys import Stores, get_typestore
 from scipy.spatial.transform import Rotation
 
-from gpo.bag import BagWriter, Recording, StampWarning, copy_with_trajectory, describe
-from gpo.camera import KB4, T265_LIKE, DoubleSphere, Pinhole
-from gpo.trajectory import Trajectory
+from gpo.cameras import KB4, T265_LIKE, DoubleSphere, Pinhole
+from gpo.io.bag import BagWriter, Recording, StampWarning, copy_with_trajectory, describe
+from gpo.io.trajectory import Trajectory
 
 FORMATS = ("ros1", "ros2", "ros2-mcap")
 T0 = 1_700_000_000_123_456_789  # ns, a stamp whose every digit counts
@@ -471,11 +471,11 @@ def write_topics(path: Path, image_topics: list[str]) -> None:
 def test_the_only_image_topic_is_picked_and_logged(tmp_path, caplog):
     path = tmp_path / "one.bag"
     write_topics(path, ["/camera/fisheye1/image_raw"])
-    with Recording(path) as recording, caplog.at_level(logging.INFO, logger="gpo.bag"):
+    with Recording(path) as recording, caplog.at_level(logging.INFO, logger="gpo.io.bag"):
         assert recording.image_topic() == "/camera/fisheye1/image_raw"
         assert len(list(recording.frames(progress=False))) == 1
     assert "/camera/fisheye1/image_raw" in caplog.text
-    assert {record.name for record in caplog.records} == {"gpo.bag"}
+    assert {record.name for record in caplog.records} == {"gpo.io.bag"}
 
 
 def test_two_image_topics_must_be_told_apart(tmp_path):

@@ -15,24 +15,18 @@ import pytest
 import yaml
 
 import gpo
-from gpo.__main__ import main
-from gpo.bag import BagWriter, Recording
-from gpo.batch import (
-    WORKER_ENVIRONMENT_UNSET,
-    Run,
-    SweepSpec,
-    cluster_client,
-    configured,
-    load_spec,
-    read_table,
-    recording_digest,
-    run_key,
-    sweep,
-)
+from gpo.batch.cluster import WORKER_ENVIRONMENT_UNSET, cluster_client
+from gpo.batch.runs import Run, configured, recording_digest, run_key
+from gpo.batch.spec import SweepSpec, load_spec
+from gpo.batch.sweep import sweep
+from gpo.batch.table import read_table
+from gpo.cli import main
+from gpo.io.bag import BagWriter, Recording
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import final_error
-from gpo.pipeline import config_to_dict, load_config, run
+from gpo.pipeline.config import config_to_dict, load_config
+from gpo.pipeline.run import run
 from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS, recording
-from gpo.trajectory import Trajectory
 
 REPOSITORY = Path(gpo.__file__).resolve().parents[1]
 CLUSTER_START_S = 60  # the most a scheduler and its workers may take to come up on a loaded machine

@@ -9,8 +9,9 @@ import numpy as np
 import pooch
 import pytest
 
-from gpo import cache, datasets
-from gpo.ground import FloorImage, analytic_table
+from gpo.floor_image.analytic import analytic_table
+from gpo.floor_image.image import FloorImage
+from gpo.io import cache, datasets
 from gpo.sim.record import fingerprint_sources
 from gpo.sim.rigs import t265_rig
 

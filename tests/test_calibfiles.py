@@ -5,7 +5,8 @@ import json
 import pytest
 import yaml
 
-from gpo.calibfiles import (
+from gpo.cameras import EUCM, KB4, DoubleSphere, Omni, Pinhole
+from gpo.cameras.files import (
     camera_from_camera_info,
     camera_info_distortion,
     load_basalt,
@@ -13,7 +14,6 @@ from gpo.calibfiles import (
     save_basalt,
     save_kalibr,
 )
-from gpo.camera import EUCM, KB4, DoubleSphere, Omni, Pinhole
 
 BASALT_EUCM_FILES = ["tumvi_512_eucm_calib.json", "euroc_eucm_calib.json"]
 BASALT_FILES = {

@@ -14,22 +14,22 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-from gpo.calibfiles import load_kalibr, save_kalibr
-from gpo.calibrate import (
+from gpo.cameras import Pinhole
+from gpo.cameras.calibrate import (
     CalibrationError,
     calibrate_corners,
     calibrate_images,
     calibrate_views,
     find_corners,
     initial_eucm,
-    main_calibrate,
     parse_board,
 )
-from gpo.camera import Pinhole
+from gpo.cameras.files import load_kalibr, save_kalibr
+from gpo.cameras.targets import Chessboard
+from gpo.cli.calibrate import main_calibrate
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_poses, board_views
 from gpo.sim.render import render_board_view
 from gpo.sim.rigs import downward_rig, t265_rig
-from gpo.targets import Chessboard
 
 FISHEYE = t265_rig().camera
 IMAGE_SIZE = (FISHEYE.width, FISHEYE.height)
@@ -214,7 +214,14 @@ def test_pinhole_with_k3_fixed_is_written_as_a_kalibr_camchain(tmp_path):
 
 def test_a_pinhole_cannot_hold_the_fisheye(detected):
     result = calibrate_corners(
-        [detected.corners[index] for index in detected.used], CALIBRATION_BOARD, IMAGE_SIZE, "pinhole"
+        [detected.corners[index]
+        for
+        index
+        in
+        detected.used],
+        CALIBRATION_BOARD,
+        IMAGE_SIZE,
+        "pinhole"
     )
     assert not result.ok
     assert result.rms_px > 10.0 * detected.rms_px

@@ -5,12 +5,12 @@ import cv2
 import numpy as np
 import pytest
 
-from gpo.calibfiles import load_boofcv
-from gpo.calibrate import MODELS, calibrate_corners, find_corners
-from gpo.camera import EUCM, KB4, DoubleSphere, Omni
-from gpo.datasets import DatasetUnavailable, boofcv_fisheye_chessboard
+from gpo.cameras import EUCM, KB4, DoubleSphere, Omni
+from gpo.cameras.calibrate import MODELS, calibrate_corners, find_corners
+from gpo.cameras.files import load_boofcv
+from gpo.cameras.targets import Chessboard
+from gpo.io.datasets import DatasetUnavailable, boofcv_fisheye_chessboard
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_poses
-from gpo.targets import Chessboard
 
 NOISE_PX = 0.3
 TRUTHS = {

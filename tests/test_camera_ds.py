@@ -4,7 +4,7 @@ independently, and round trips over the whole image of a T265-sized lens."""
 import numpy as np
 import pytest
 
-from gpo.camera import EUCM, DoubleSphere
+from gpo.cameras import EUCM, DoubleSphere
 
 # Basalt's published calibration of the TUM VI 512 left camera (basalt/data/tumvi_512_ds_calib.json, cam0)
 TUMVI = DoubleSphere(

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from gpo.camera import EUCM
+from gpo.cameras import EUCM
 
 T265_LIKE = EUCM(fx=286.0, fy=286.2, cx=424.3, cy=400.1, alpha=0.6, beta=1.1, width=848, height=800)
 

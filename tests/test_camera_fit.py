@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from gpo.calibfiles import load_basalt
-from gpo.camera import EUCM, KB4, DoubleSphere, Omni, Pinhole
-from gpo.camera_fit import fit_model, local_focal, model_name, parameter_bounds
+from gpo.cameras import EUCM, KB4, DoubleSphere, Omni, Pinhole
+from gpo.cameras.files import load_basalt
+from gpo.cameras.fit import fit_model, local_focal, model_name, parameter_bounds
 
 
 @pytest.mark.parametrize("alpha", [0.4, 0.62])

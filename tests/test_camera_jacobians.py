@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from gpo.camera import EUCM, KB4, DoubleSphere, Omni
+from gpo.cameras import EUCM, KB4, DoubleSphere, Omni
 
 CAMERAS = [
     EUCM(286.0, 286.2, 424.3, 400.1, alpha=0.6, beta=1.1, width=848, height=800),

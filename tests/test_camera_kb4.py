@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from gpo.camera import KB4
+from gpo.cameras import KB4
 
 # Basalt's published calibration of a real T265's left fisheye (basalt/data/t265_kb4_calib.json, camera 0)
 T265 = KB4(

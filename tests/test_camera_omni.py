@@ -12,8 +12,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from gpo.calibfiles import load_kalibr, save_kalibr
-from gpo.camera import EUCM, Omni, Pinhole
+from gpo.cameras import EUCM, Omni, Pinhole
+from gpo.cameras.files import load_kalibr, save_kalibr
 
 # like the front camera of Kalibr's car (xi > 1: the fold at s_z = -1/xi lies inside the image)
 FRONT_LIKE = Omni(

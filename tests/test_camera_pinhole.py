@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from gpo.camera import Pinhole
+from gpo.cameras import Pinhole
 
 DOWNWARD = Pinhole(
     fx=600.0, fy=601.5, cx=376.2, cy=239.7, dist=(-0.28, 0.09, 0.0012, -0.0008, -0.01), width=752, height=480

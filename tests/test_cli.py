@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gpo.__main__ import main
-from gpo.bag import Recording
-from gpo.camera import T265_LIKE
+from gpo.cameras import T265_LIKE
+from gpo.cli import main
+from gpo.io.bag import Recording
+from gpo.io.trajectory import Trajectory
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
-from gpo.trajectory import Trajectory
 
 
 def test_demo_writes_figures_and_the_field_of_view_table(tmp_path):

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import yaml
 
-from gpo.calibfiles import save_kalibr
-from gpo.config import load_rig, save_rig
-from gpo.rig import CameraMount
+from gpo.cameras.files import save_kalibr
+from gpo.cameras.rig import CameraMount
+from gpo.pipeline.schema import load_rig, save_rig
 from gpo.sim.rigs import downward_rig, t265_rig
 
 

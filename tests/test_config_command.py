@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 import yaml
 
-import gpo.bag
-from gpo.__main__ import main
-from gpo.bag import BagWriter
-from gpo.calibfiles import save_kalibr
-from gpo.pipeline import load_config
-from gpo.propose import MARGIN_PX, check_region, floor_region, footprint
-from gpo.rig import CameraMount
+import gpo.io.bag
+from gpo.cameras.files import save_kalibr
+from gpo.cameras.rig import CameraMount
+from gpo.cli import main
+from gpo.io.bag import BagWriter
+from gpo.pipeline.config import load_config
+from gpo.pipeline.propose import MARGIN_PX, check_region, floor_region, footprint
 from gpo.sim.realsense import RIGS, realsense_recording
 from gpo.sim.record import START_NS, recording
 from gpo.sim.rigs import downward_rig, t265_rig
@@ -102,12 +102,12 @@ def test_bad_bags_and_mounts_are_clear_errors_that_say_what_to_give(tmp_path, ca
     assert "does not lead from base_link to the camera's frame camera_fisheye1_optical_frame" in error
     assert "base_link -> camera_pose_frame" in error and "--mount" in error
     with monkeypatch.context() as patched:
-        patched.setattr(gpo.bag, "camera_info_distortion", lambda camera: ("fov", [0.92]))
+        patched.setattr(gpo.io.bag, "camera_info_distortion", lambda camera: ("fov", [0.92]))
         fov = _small_bag(tmp_path / "fov.bag", rig.camera, [("base_link", rig.frame_id)])
     error = _fails(["config", str(fov), *out], capsys)
     assert "distortion model 'fov'" in error and "--camera CALIB instead" in error
     with monkeypatch.context() as patched:
-        patched.setattr(gpo.bag, "camera_info_distortion", lambda camera: ("equidistant", [0.0] * 4))
+        patched.setattr(gpo.io.bag, "camera_info_distortion", lambda camera: ("equidistant", [0.0] * 4))
         zeros = SimpleNamespace(fx=0.0, fy=0.0, cx=0.0, cy=0.0, width=848, height=800)
         zero = _small_bag(tmp_path / "zero.bag", zeros, [("base_link", rig.frame_id)])
     error = _fails(["config", str(zero), *out], capsys)

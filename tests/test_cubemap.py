@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from gpo.camera import EUCM, T265_LIKE
-from gpo.cubemap import CROSS_CELLS, FACE_NAMES, Cubemap
+from gpo.cameras import EUCM, T265_LIKE
+from gpo.floor_image.cubemap import CROSS_CELLS, FACE_NAMES, Cubemap
 from gpo.sim.record import FLOOR_BOARDS, floor_board_image
 from gpo.sim.render import camera_pose_in_world
 from gpo.sim.rigs import t265_rig

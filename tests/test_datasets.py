@@ -1,4 +1,5 @@
-"""gpo.datasets: every registered file is found in a local copy and checks out; offline failures are clear and fast."""
+"""gpo.io.datasets: every registered file is found in a local copy and checks out; offline failures are clear and
+fast."""
 
 import hashlib
 import re
@@ -8,7 +9,7 @@ import pooch
 import pytest
 import requests
 
-from gpo import datasets
+from gpo.io import datasets
 
 BASALT_COMMIT = "0f3b2b52c807f70ff4e2973ce253c73329eea7bc"
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "real_data"

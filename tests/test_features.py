@@ -10,21 +10,20 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from gpo.features import (
+from gpo.motion.keypoints import (
     SUPPORT_PER_SIZE,
     FeatureError,
     FeatureMatches,
     FeatureParameters,
     FeatureTracker,
     choose_cardinality,
-    degenerate,
     detect,
     histogram_filter,
     invariance_check,
     match,
-    refit,
 )
-from gpo.kinematics import increment_from_point_pairs, rigid_fit, seen_after
+from gpo.odometry.estimators.keypoints import degenerate, refit
+from gpo.odometry.kinematics import increment_from_point_pairs, rigid_fit, seen_after
 
 SIZE = (320, 240)  # width, height
 
@@ -496,7 +495,7 @@ def test_eq_3_as_printed_is_the_suites_increment(theta, tx, ty):
 
 def test_eq_4_composes_the_printed_matrices():
     """A_i^0 = A_1^0 A_2^1 ... A_i^(i-1) by matrix products here, against the suite's composition of increments."""
-    from gpo.kinematics import integrate
+    from gpo.odometry.kinematics import integrate
 
     increments = np.random.default_rng(6).normal([0.01, 0.002, 0.01], [0.005, 0.003, 0.02], (30, 3))
     product = np.eye(3)

@@ -4,8 +4,9 @@ import cv2
 import numpy as np
 import pytest
 
-from gpo.flow import LAYER_MIN_TRACKS, TEXTURE_LAG_PX, FloorFlow, FlowError, KLTParameters, floor_layer, floor_texture
-from gpo.kinematics import increment_from_point_pairs
+from gpo.motion.klt import TEXTURE_LAG_PX, FloorFlow, FlowError, KLTParameters, floor_texture
+from gpo.motion.layers import LAYER_MIN_TRACKS, floor_layer
+from gpo.odometry.kinematics import increment_from_point_pairs
 
 
 def _texture(size=240, seed=0) -> np.ndarray:
@@ -200,7 +201,8 @@ def test_losing_most_tracks_is_flagged_even_when_enough_remain():
 
 
 def two_layers(floor: int, reflections: int, turn_deg: float, shift_px, mirror_share: float, seed: int = 0):
-    """Tracks of a floor and of the reflections in it over one frame, as ``gpo.flow.floor_layer`` describes them:
+    """Tracks of a floor and of the reflections in it over one frame, as ``gpo.motion.layers.floor_layer`` describes
+    them:
     both turn by ``turn_deg`` about the nadir (100, 60); the floor then moves by ``shift_px``, the reflections by
     ``mirror_share`` of it; 0.1 px of tracking noise. Returns start, end (N, 2), the nadir and the floor's mask."""
     rng = np.random.default_rng(seed)

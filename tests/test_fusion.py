@@ -16,10 +16,11 @@ from gpo.fusion import (
     increment_covariance,
     increment_jacobians,
 )
-from gpo.kinematics import arc_increment, between, integrate
-from gpo.sim.motion import T265_DRIFT, TrackingDrift, named_plan, tracking_odometry
+from gpo.io.trajectory import Trajectory, base_from_sensor_odometry
+from gpo.odometry.kinematics import arc_increment, between, integrate
+from gpo.sim.drift import T265_DRIFT, TrackingDrift, tracking_odometry
+from gpo.sim.paths import named_plan
 from gpo.sim.rigs import RIGS
-from gpo.trajectory import Trajectory, base_from_sensor_odometry
 
 
 @given(st.tuples(*[st.floats(-3.0, 3.0)] * 6))

@@ -5,11 +5,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-import gpo.pipeline
-from gpo.bag import BagWriter, Recording
+import gpo.pipeline.run
 from gpo.fusion import FusionSettings, TrackingMount
-from gpo.pipeline import load_config, run, save_config, tracking_mount, tracking_path
-from gpo.trajectory import Trajectory
+from gpo.io.bag import BagWriter, Recording
+from gpo.io.trajectory import Trajectory
+from gpo.pipeline.config import load_config, save_config
+from gpo.pipeline.run import run, tracking_mount, tracking_path
 
 MOUNT = TrackingMount((0.6, 0.0, 0.12), (0.0, -6.0, 0.0))  # ahead of the rear axle, pitched 6 deg down
 
@@ -92,7 +93,7 @@ def test_the_fused_route_runs_with_the_config_mount_and_reports_it(tmp_path):
 
 
 def test_unreadable_tracking_poses_are_refused_before_the_first_frame(tmp_path, monkeypatch):
-    monkeypatch.setattr(gpo.pipeline, "odometry", lambda *a, **k: pytest.fail("frames were read"))
+    monkeypatch.setattr(gpo.pipeline.run, "odometry", lambda *a, **k: pytest.fail("frames were read"))
     with pytest.raises(ValueError, match=r"tracking camera's odometry on /camera/odom/sample cannot be read: .*finite"):
         run(_bag(tmp_path, nan=True), _fused_config(), progress=False)
 

@@ -18,23 +18,14 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.ndimage import map_coordinates
 
-import gpo.ground
-from gpo.book.ch04_table1 import reproduce_table1
-from gpo.ground import (
-    DEFAULT_FLOOR_IMAGE,
-    FloorImage,
-    GroundImageError,
-    analytic_points,
-    analytic_table,
-    chessboard_route,
-    front_face_corners,
-    ground_plane_image,
-    ortho_rectify,
-    pixels_to_floor,
-    route_difference,
-)
-from gpo.mount import detect_corners
-from gpo.rig import CameraMount
+import gpo.floor_image.analytic
+from gpo.cameras.mount import detect_corners
+from gpo.cameras.rig import CameraMount
+from gpo.experiments.table1 import reproduce_table1
+from gpo.floor_image.analytic import analytic_points, analytic_table, pixels_to_floor, route_difference
+from gpo.floor_image.gpi import front_face_corners, ground_plane_image
+from gpo.floor_image.image import DEFAULT_FLOOR_IMAGE, FloorImage, GroundImageError
+from gpo.floor_image.ortho import chessboard_route, ortho_rectify
 from gpo.sim.floors import make_floor
 from gpo.sim.record import FLOOR_BOARDS, TEXEL_M, floor_board_image
 from gpo.sim.render import FloorRenderer, camera_pose_in_world
@@ -276,7 +267,7 @@ def test_second_build_is_read_from_the_cache_and_a_new_calibration_makes_a_new_k
     def fail(*args):
         raise AssertionError("the table was built again instead of read from the cache")
 
-    monkeypatch.setattr(gpo.ground, "analytic_points", fail)
+    monkeypatch.setattr(gpo.floor_image.analytic, "analytic_points", fail)
     second = analytic_table(RIG.camera, RIG.mount, floor)
     assert second.key == first.key
     for name in ("map_x", "map_y", "valid"):
@@ -372,7 +363,7 @@ def _suggested(message: str):
         (lambda: FloorImage.top_view((0.9, 0.7)), "far > near"),
         (lambda: FloorImage.top_view(metres_per_pixel=0.0), "positive"),
         (lambda: analytic_table(RIG.camera, (0.12, 0.1)), "height m, pitch rad, roll rad"),
-        (lambda: gpo.ground.block_corner_indices(BOARD.board, (4, 2)), "1 <= i <= 3"),
+        (lambda: gpo.floor_image.ortho.block_corner_indices(BOARD.board, (4, 2)), "1 <= i <= 3"),
     ],
 )
 def test_bad_parameters(call, message):

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gpo.calibfiles import load_kalibr, save_kalibr
-from gpo.camera import Omni
-from gpo.kalibr_car import CAMERA_NAMES, CarCamera, kalibr_car_cameras, parse_info, read_pipeline_info
+from gpo.cameras import Omni
+from gpo.cameras.files import load_kalibr, save_kalibr
+from gpo.io.kalibr_car import CAMERA_NAMES, CarCamera, kalibr_car_cameras, parse_info, read_pipeline_info
 
 EXAMPLE = "kalibr/aslam_cv/aslam_cv_python/example"
 

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from gpo.kinematics import (
+from gpo.odometry.kinematics import (
     SMALL_ANGLE,
     PaperBicycle,
     arc_increment,

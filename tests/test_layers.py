@@ -97,7 +97,7 @@ from ..book import figures
 
 def later():
     import ipywidgets
-    from gpo.pipeline import run
+    from gpo.pipeline.run import run
 '''
 
 
@@ -118,4 +118,4 @@ def test_the_check_fails_a_method_module_that_imports_the_simulator():
     source = (PACKAGE / "pipeline.py").read_text(encoding="utf-8") + "\nfrom gpo.sim.record import recording\n"
     found = violations(source, "method", "gpo")
     assert found == [f"line {source.count(chr(10))}: gpo.sim.record"]
-    assert violations(source.replace("gpo.sim.record", "gpo.trajectory"), "method", "gpo") == []
+    assert violations(source.replace("gpo.sim.record", "gpo.io.trajectory"), "method", "gpo") == []

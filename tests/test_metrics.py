@@ -11,7 +11,8 @@ from evo.core.trajectory import PoseTrajectory3D
 from evo.tools import file_interface
 from scipy.spatial.transform import Rotation
 
-from gpo import datasets
+from gpo.io import datasets
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import (
     MAX_STAMP_DIFFERENCE_S,
     associate,
@@ -23,7 +24,6 @@ from gpo.metrics import (
     translation_error,
     truth_poses,
 )
-from gpo.trajectory import Trajectory
 
 
 def _planar(stamps_s, x, y, yaw):

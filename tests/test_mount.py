@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-import gpo.mount
-from gpo.mount import MountError, detect_corners, estimate_mount, floor_angles, mount_from_corners
+import gpo.cameras.mount
+from gpo.cameras.mount import MountError, detect_corners, estimate_mount, floor_angles, mount_from_corners
+from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.sim.floors import make_floor
 from gpo.sim.record import FLOOR_BOARDS, floor_board_image
 from gpo.sim.render import FloorRenderer, camera_pose_in_world
 from gpo.sim.rigs import CameraMount, Rig, downward_rig, t265_rig
-from gpo.targets import Chessboard, FloorBoard
 
 HEIGHT_TOL_M = 1e-3
 ANGLE_TOL = np.radians(0.1)
@@ -242,13 +242,13 @@ def test_a_pose_behind_the_camera_is_refused(monkeypatch):
     """IPPE's twin, the board mirrored through the optical centre, fits normalised rays as well as the true pose."""
     rig, kind, _, _ = TRUTH["downward"]
     placement = FLOOR_BOARDS["downward"]
-    solve = gpo.mount._initial_pose
+    solve = gpo.cameras.mount._initial_pose
 
     def behind(rays, board):
         rotation, translation = solve(rays, board)
         return rotation * Rotation.from_euler("z", np.pi), -translation
 
-    monkeypatch.setattr(gpo.mount, "_initial_pose", behind)
+    monkeypatch.setattr(gpo.cameras.mount, "_initial_pose", behind)
     with pytest.raises(MountError, match="behind the camera"):
         mount_from_corners(true_corners(rig, placement), rig.camera, placement.board, placement, kind=kind)
 

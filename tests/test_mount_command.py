@@ -8,15 +8,15 @@ import cv2
 import numpy as np
 import pytest
 
-from gpo.__main__ import main
-from gpo.calibfiles import save_kalibr
-from gpo.config import load_mount
-from gpo.mount import floor_angles
+from gpo.cameras.files import save_kalibr
+from gpo.cameras.mount import floor_angles
+from gpo.cameras.targets import FloorBoard
+from gpo.cli import main
+from gpo.pipeline.schema import load_mount
 from gpo.sim.floors import make_floor
 from gpo.sim.record import FLOOR_BOARDS, TEXEL_M, floor_board_image
 from gpo.sim.render import FloorRenderer
 from gpo.sim.rigs import RIGS
-from gpo.targets import FloorBoard
 
 HEIGHT_TOL_M = 0.5e-3
 ANGLE_TOL_DEG = 0.1

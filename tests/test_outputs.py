@@ -1,8 +1,8 @@
-"""gpo.outputs' writers: what they write reads back, into a folder made for it, with nothing else left behind."""
+"""gpo.io.outputs' writers: what they write reads back, into a folder made for it, with nothing else left behind."""
 
 import json
 
-from gpo.outputs import write_json, write_text
+from gpo.io.outputs import write_json, write_text
 
 
 def test_write_json_makes_the_folder_and_reads_back(tmp_path):

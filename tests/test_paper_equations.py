@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gpo.camera import T265_LIKE
-from gpo.cubemap import FACE_ROTATIONS, Cubemap
-from gpo.kinematics import PaperBicycle, metres_per_pixel
+from gpo.cameras import T265_LIKE
+from gpo.floor_image.cubemap import FACE_ROTATIONS, Cubemap
+from gpo.odometry.kinematics import PaperBicycle, metres_per_pixel
 
 # eqs. 8-12 as the paper's text lists their nine entries, in the order it gives them
 PRINTED_ENTRIES = {

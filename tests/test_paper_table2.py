@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import paper_table2
-from gpo.trajectory import Trajectory
 
 STAMPS = np.arange(101, dtype=np.int64) * 100_000_000  # 10 Hz for 10 s
 

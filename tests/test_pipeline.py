@@ -6,15 +6,17 @@ import numpy as np
 import pytest
 import yaml
 
-from gpo.__main__ import main
-from gpo.bag import BagWriter, Recording
-from gpo.book.runs import board_image_path, route_config
-from gpo.kinematics import compose
+from gpo.cli import main
+from gpo.experiments.runs import board_image_path, route_config
+from gpo.io.bag import BagWriter, Recording
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import final_error
-from gpo.pipeline import FloorOdometer, FrameRecord, OdometryResult, load_config, run, save_config, tracking_path
+from gpo.odometry.kinematics import compose
+from gpo.pipeline.config import load_config, save_config
+from gpo.pipeline.odometer import FloorOdometer, FrameRecord
+from gpo.pipeline.run import OdometryResult, run, tracking_path
 from gpo.sim.record import FLOOR_BOARDS, GROUND_TRUTH_TOPIC, recording
 from gpo.sim.rigs import t265_rig
-from gpo.trajectory import Trajectory
 
 FRAMES = 60  # two seconds of the sample recording: straight ahead at up to 0.5 m/s
 
@@ -236,7 +238,21 @@ def test_a_runs_floor_run_is_what_the_filter_reads_of_its_frames():
 
 
 def test_the_summary_counts_the_frames_whose_flow_held_a_slower_layer():
-    """A tenth or more of a frame's kept vectors in a slower layer (``gpo.flow.slower_layer``) counts the frame."""
+    """A
+    tenth
+    or
+    more
+    of
+    a
+    frame's
+    kept
+    vectors
+    in
+    a
+    slower
+    layer
+    (``gpo.motion.layers.slower_layer``) counts the
+    frame."""
     nan = float("nan")
     records = [
         FrameRecord(0, (0.0, 0.0, 0.0), 0, 0, 0, nan, "first"),

@@ -8,9 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gpo.bag import Recording
+from gpo.io.bag import Recording
 from gpo.metrics import evaluate, final_error
-from gpo.pipeline import FloorOdometer, load_config, odometry, run, save_config
+from gpo.pipeline.config import load_config, save_config
+from gpo.pipeline.odometer import FloorOdometer
+from gpo.pipeline.run import odometry, run
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
 CONFIG = Path(__file__).resolve().parents[1] / "gpo" / "configs" / "sim_downward.yaml"
@@ -87,13 +89,13 @@ def test_features_config_round_trip_and_its_rules(tmp_path):
         load_config(tmp_path / "bad.yaml")
 
 
-# ----------------------------------------------------------- the second paper's experiments (gpo.book.ch08_table2)
+# ----------------------------------------------------------- the second paper's experiments (gpo.experiments.table2)
 
 
 def test_a_stepped_experiment_sees_one_frame_in_the_middle_of_each_rest():
     """IV: 50 steps of 10 mm; the paper's camera took an image at each rest, and so does the odometer here."""
-    from gpo.book.ch08_table2 import experiment, rest_stamps_ns
-    from gpo.sim.motion import named_plan
+    from gpo.experiments.table2 import experiment, rest_stamps_ns
+    from gpo.sim.paths import named_plan
     from gpo.sim.record import START_NS
 
     chosen = experiment("IV")
@@ -107,7 +109,7 @@ def test_a_stepped_experiment_sees_one_frame_in_the_middle_of_each_rest():
 
 def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
     """Against the stage's truth at each rest, under the paper's definitions: the paper's IV ends 0.35 mm off."""
-    from gpo.book.ch08_table2 import experiment, table2_row
+    from gpo.experiments.table2 import experiment, table2_row
 
     row = table2_row(experiment("IV"), load_config(CONFIG), cache=False)
     assert row.frames == 51
@@ -118,7 +120,7 @@ def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
 
 
 def test_unknown_experiments_are_named():
-    from gpo.book.ch08_table2 import experiment
+    from gpo.experiments.table2 import experiment
 
     with pytest.raises(ValueError, match="the experiments are I, II, IV"):
         experiment("III")

@@ -7,13 +7,15 @@ import math
 import numpy as np
 import pytest
 
-from gpo import cache
-from gpo.bag import Recording
-from gpo.camera import EUCM, Pinhole
+from gpo.cameras import EUCM, Pinhole
+from gpo.io import cache
+from gpo.io.bag import Recording
+from gpo.sim.drift import tracking_odometry
 from gpo.sim.floors import FLOOR_KINDS, FloorDesign, make_floor
-from gpo.sim.motion import MotionPlan, Slide, Spin, Straight, tracking_odometry
+from gpo.sim.plans import MotionPlan
 from gpo.sim.population import DOWNWARD, FISHEYE, MIN_FOOTPRINT_M, PATH_LENGTH_M, ROOM_M, draw, matte
 from gpo.sim.record import GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, START_NS, recording, setup_of
+from gpo.sim.segments import Slide, Spin, Straight
 
 SEEDS = range(40)
 

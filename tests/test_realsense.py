@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gpo.__main__ import main
-from gpo.bag import Recording
+from gpo.cameras.rig import OPTICAL_IN_BODY
+from gpo.cli import main
+from gpo.io.bag import Recording
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import evaluate
-from gpo.rig import OPTICAL_IN_BODY
 from gpo.sim.realsense import FISHEYE1_IN_POSE, RIGS, realsense_recording
 from gpo.sim.record import GROUND_TRUTH_TOPIC
-from gpo.trajectory import Trajectory
 
 TOPICS = {
     "/camera/fisheye1/image_raw": "sensor_msgs/msg/Image",

@@ -9,26 +9,10 @@ from hypothesis import strategies as st
 from scipy.integrate import quad
 from scipy.spatial.transform import Rotation
 
-from gpo.sim.motion import (
-    DEFAULT_LIMITS,
-    NO_DRIFT,
-    PAPER_TURN_RATE_RADPS,
-    PATH_LIMITS,
-    PATHS,
-    Arc,
-    Bend,
-    MotionLimits,
-    MotionPlan,
-    SCurve,
-    Slide,
-    Spin,
-    Stop,
-    Straight,
-    TrackingDrift,
-    camera_truth,
-    named_plan,
-    tracking_odometry,
-)
+from gpo.sim.drift import NO_DRIFT, TrackingDrift, camera_truth, tracking_odometry
+from gpo.sim.paths import PAPER_TURN_RATE_RADPS, PATH_LIMITS, PATHS, named_plan
+from gpo.sim.plans import MotionPlan
+from gpo.sim.segments import DEFAULT_LIMITS, Arc, Bend, MotionLimits, SCurve, Slide, Spin, Stop, Straight
 
 START = (1.0, -2.0, 0.7)  # a start pose off the origin, so that frames are not confused
 MOUNT_ROTATION = Rotation.from_euler("YX", [np.radians(6.0), np.radians(1.5)])  # pitched down, rolled

@@ -3,10 +3,11 @@
 import numpy as np
 import pytest
 
-from gpo.pipeline import FloorOdometer, load_config
+from gpo.pipeline.config import load_config
+from gpo.pipeline.odometer import FloorOdometer
 from gpo.sim.floors import make_floor
-from gpo.sim.motion import named_plan
 from gpo.sim.outages import KINDS, Outage, apply_outage, outage_at, outage_fraction
+from gpo.sim.paths import named_plan
 from gpo.sim.record import FLOOR_OUTAGES, PRESETS
 from gpo.sim.render import FloorRenderer
 from gpo.sim.rigs import RIGS

@@ -10,9 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gpo import cache
-from gpo.bag import Recording
-from gpo.sim.motion import T265_DRIFT, named_plan, tracking_odometry
+from gpo.io import cache
+from gpo.io.bag import Recording
+from gpo.sim.drift import T265_DRIFT, tracking_odometry
+from gpo.sim.paths import named_plan
 from gpo.sim.record import (
     GROUND_TRUTH_TOPIC,
     ODOMETRY_TOPIC,
@@ -139,7 +140,7 @@ def test_only_the_short_presets_are_disturbed():
 
 def test_the_cache_key_hashes_every_module_a_recording_runs():
     """Every gpo module that importing the simulator loads is hashed, so no change to one reuses a stale bag;
-    the tables that only read recordings are not, so changing them re-renders nothing; nor is ``gpo.cache``,
+    the tables that only read recordings are not, so changing them re-renders nothing; nor is ``gpo.io.cache``,
     which names and places the files but does not shape what is in them."""
     program = (
         "import sys, gpo.sim.record\n"

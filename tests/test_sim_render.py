@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_views
 from gpo.sim.floors import FLOOR_KINDS, make_floor
 from gpo.sim.render import (
@@ -21,7 +22,6 @@ from gpo.sim.render import (
     render_board_view,
 )
 from gpo.sim.rigs import downward_rig, t265_rig
-from gpo.targets import Chessboard, FloorBoard
 
 RIGS = {"t265": t265_rig(), "downward": downward_rig()}
 

@@ -1,15 +1,17 @@
 """Every stage works with any camera model: the cubemap, the GPI, the ortho-GPI and the analytic floor image
 built with a Kannala-Brandt (KB4) calibration of the simulated T265 agree with those built with its EUCM, to
-within how closely the KB4 reproduces that EUCM. The motion stages (gpo.flow, gpo.features) read only floor
-images, never the camera model."""
+within how closely the KB4 reproduces that EUCM. The motion stages (gpo.motion.klt, gpo.motion.keypoints) read only
+floor images, never the camera model."""
 
 import numpy as np
 import pytest
 
-from gpo.camera import KB4
-from gpo.camera_fit import fit_model
-from gpo.cubemap import Cubemap
-from gpo.ground import DEFAULT_FLOOR_IMAGE, analytic_table, chessboard_route, route_difference
+from gpo.cameras import KB4
+from gpo.cameras.fit import fit_model
+from gpo.floor_image.analytic import analytic_table, route_difference
+from gpo.floor_image.cubemap import Cubemap
+from gpo.floor_image.image import DEFAULT_FLOOR_IMAGE
+from gpo.floor_image.ortho import chessboard_route
 from gpo.sim.record import FLOOR_BOARDS, floor_board_image
 from gpo.sim.rigs import t265_rig
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gpo import datasets
-from gpo.calibfiles import load_basalt
-from gpo.camera import T265_LIKE
-from gpo.straightness import aprilgrid_lines, aprilgrid_tags, line_residuals_deg, plane_residuals_deg
+from gpo.cameras import T265_LIKE
+from gpo.cameras.files import load_basalt
+from gpo.cameras.straightness import aprilgrid_lines, aprilgrid_tags, line_residuals_deg, plane_residuals_deg
+from gpo.io import datasets
 
 
 def test_rays_in_one_plane_have_zero_residual_and_a_tilted_ray_its_angle():

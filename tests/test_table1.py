@@ -1,11 +1,12 @@
-"""The first paper's Table 1 under its definitions (``gpo.book.ch04_table1.paper_table1``)."""
+"""The first paper's Table 1 under its definitions (``gpo.experiments.table1.paper_table1``)."""
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
 from gpo.book.ch04_ortho_gpi import table1_errors_panel
-from gpo.book.ch04_table1 import (
+from gpo.cameras import T265_LIKE
+from gpo.experiments.table1 import (
     CALIBRATION_ERRORS,
     PAPER_TABLE1,
     PAPER_TABLE1_ERRORS,
@@ -16,7 +17,6 @@ from gpo.book.ch04_table1 import (
     paper_table1,
     reproduce_table1,
 )
-from gpo.camera import T265_LIKE
 
 
 def test_the_papers_truth_is_its_measured_squares():

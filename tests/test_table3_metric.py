@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import relative_translation_errors
-from gpo.trajectory import Trajectory
 
 
 def straight(scale=1.0, seconds=5.0, rate=20.0):

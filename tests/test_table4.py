@@ -1,20 +1,20 @@
-"""gpo.book.ch09_table4 against numbers computed here: the table's final errors are those of the tracking camera, a
+"""gpo.experiments.table4 against numbers computed here: the table's final errors are those of the tracking camera, a
 fresh floor run and its EKF (and, for the floor run, those of a hand-made association and first-pose placement); its
-text names every row and path; a kept floor run (gpo.book.runs) is what a fresh run computes; and each config is kept
-in its own file.
-On the sample recording, so that it runs in seconds."""
+text names every row and path; a kept floor run (gpo.experiments.runs) is what a fresh run computes; and each config
+is kept in its own file. On the sample recording, so that it runs in seconds."""
 
 import numpy as np
 import pytest
 
-from gpo import cache
-from gpo.bag import Recording
-from gpo.book import runs
-from gpo.book.ch09_table4 import ROWS, Row, format_fusion_accuracy, reproduce_table4
-from gpo.book.runs import floor_run, route_config
+from gpo.experiments import runs
+from gpo.experiments.runs import floor_run, route_config
+from gpo.experiments.table4 import ROWS, Row, format_fusion_accuracy, reproduce_table4
 from gpo.fusion import fuse
+from gpo.io import cache
+from gpo.io.bag import Recording
 from gpo.metrics import MAX_STAMP_DIFFERENCE_S, final_error
-from gpo.pipeline import load_config, tracking_path
+from gpo.pipeline.config import load_config
+from gpo.pipeline.run import tracking_path
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
 CAMERA, FLOOR, FUSED = Row("camera"), Row("floor", "gpo-exact", "analytic"), Row("fused", "gpo-exact", "analytic")
@@ -141,7 +141,7 @@ def test_each_config_is_kept_in_its_own_file(sample, empty_cache):
 def test_a_drifted_tracking_camera_is_the_bags_own_for_the_bags_drift(sample):
     """``drifted_tracking`` makes the recording's tracking stream without rendering: for the preset's own drift and
     seed it is the bag's, to the nanometre."""
-    from gpo.sim.motion import T265_DRIFT
+    from gpo.sim.drift import T265_DRIFT
     from gpo.sim.record import PRESETS
 
     _, _, tracking = sample

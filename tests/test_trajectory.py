@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gpo.trajectory import Trajectory, base_from_sensor_odometry
+from gpo.io.trajectory import Trajectory, base_from_sensor_odometry
 
 
 def test_tum_round_trip_keeps_every_nanosecond_and_value(tmp_path):

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from gpo.book.ch09_evaluation import evaluation_panel
-from gpo.book.ch09_table4 import Row, Table4
+from gpo.experiments.table4 import Row, Table4
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import evaluate
-from gpo.trajectory import Trajectory
 
 ROWS = (Row("camera"), Row("floor", "gpo", "ortho-gpi"), Row("fused", "gpo", "ortho-gpi"), Row("floor", "gpo", "gpi"))
 PATHS = ("arc", "line")

@@ -19,7 +19,7 @@ from gpo.book.ch08_floor_features import (
     draw_match_histogram,
     feature_panel,
 )
-from gpo.features import FeatureParameters, FeatureTracker, detect, histogram_filter
+from gpo.motion.keypoints import FeatureParameters, FeatureTracker, detect, histogram_filter
 
 SIZE = (320, 240)  # width, height
 NOISY = {"detector": "orb", "ratio": 1.0, "invariance_threshold": 0.95}  # wrong matches for both filters to reject

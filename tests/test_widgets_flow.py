@@ -8,7 +8,7 @@ from matplotlib.quiver import Quiver
 
 from gpo.book.ch05_klt_flow import klt_flow_panel
 from gpo.book.ch06_kinematics import bicycle_panel, constant_steering_paths
-from gpo.kinematics import exact_velocities
+from gpo.odometry.kinematics import exact_velocities
 
 
 @pytest.fixture(autouse=True)

@@ -8,10 +8,10 @@ import pytest
 
 from gpo.book.ch07_ekf_fusion import FUSION_SLIDERS, fusion_panel
 from gpo.fusion import FusionSettings, fuse
-from gpo.kinematics import arc_increment, integrate
+from gpo.io.trajectory import Trajectory
 from gpo.metrics import final_error
-from gpo.pipeline import FloorRun
-from gpo.trajectory import Trajectory
+from gpo.odometry.kinematics import arc_increment, integrate
+from gpo.pipeline.run import FloorRun
 
 V, OMEGA, SECONDS = 0.3, 0.4, 2.0
 

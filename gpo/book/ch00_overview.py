@@ -7,11 +7,11 @@ import ipywidgets as widgets
 import matplotlib.pyplot as plt
 import numpy as np
 
-from gpo.bag import Recording
-from gpo.rig import Rig, floor_points, rays_in_base
-from gpo.sim.motion import tracking_odometry
+from gpo.cameras.rig import Rig, floor_points, rays_in_base
+from gpo.io.bag import Recording
+from gpo.io.trajectory import base_from_sensor_odometry
+from gpo.sim.drift import tracking_odometry
 from gpo.sim.record import START_NS, preset
-from gpo.trajectory import base_from_sensor_odometry
 
 
 def floor_seen(rig: Rig, max_range: float = np.inf, step: int = 1) -> np.ndarray:

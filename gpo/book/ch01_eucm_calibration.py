@@ -7,11 +7,11 @@ import ipywidgets as widgets
 import matplotlib.pyplot as plt
 import numpy as np
 
-from gpo.calibrate import CalibrationError, calibrate_corners
+from gpo.cameras.calibrate import CalibrationError, calibrate_corners
 
 
 def draw_residuals(result, ax=None, scale: float | None = None) -> plt.Axes:
-    """Residual vectors of a ``gpo.calibrate.CalibrationResult`` over its image, magnified ``scale`` times
+    """Residual vectors of a ``gpo.cameras.calibrate.CalibrationResult`` over its image, magnified ``scale`` times
     (by default so that an RMS-sized residual is drawn 10 px long)."""
     if ax is None:
         _, ax = plt.subplots(figsize=(6.4, 6.0))

@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gpo.book.panels import slider
-from gpo.camera import EUCM, T265_LIKE, Pinhole
+from gpo.cameras import EUCM, T265_LIKE, Pinhole
 
 SURFACE_COLOURS = {"floor": "tab:brown", "left wall": "tab:blue", "right wall": "tab:green", "front wall": "tab:purple"}
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 import ipywidgets as widgets
 import matplotlib.pyplot as plt
 
-from gpo.camera import EUCM
-from gpo.cubemap import Cubemap, default_face_size
+from gpo.cameras import EUCM
+from gpo.floor_image.cubemap import Cubemap, default_face_size
 
 
 def cubemap_panel(fisheye_image, camera: EUCM) -> widgets.VBox:
     """A face-size slider over the cubemap of ``fisheye_image``: the cross of the five faces, redrawn on release.
 
-    The default face size (``gpo.cubemap.default_face_size``) keeps the fisheye's pixel density at the
+    The default face size (``gpo.floor_image.cubemap.default_face_size``) keeps the fisheye's pixel density at the
     front face's centre; smaller faces throw detail away, larger ones only interpolate.
     """
     default = default_face_size(camera)

@@ -8,23 +8,19 @@ import numpy as np
 
 from gpo.book.figures import draw_floor_image
 from gpo.book.panels import int_slider, slider
-from gpo.cubemap import Cubemap
-from gpo.ground import (
-    GroundImageError,
-    analytic_table,
-    front_face_corners,
-    ground_plane_image,
-    route_difference,
-)
+from gpo.floor_image.analytic import analytic_table, route_difference
+from gpo.floor_image.cubemap import Cubemap
+from gpo.floor_image.gpi import front_face_corners, ground_plane_image
+from gpo.floor_image.image import GroundImageError
 
 GPI_CORNER_NAMES = ("near-right", "far-right", "far-left", "near-left")
-"""The four corners of eq. 22 in the order of ``gpo.ground.front_face_corners``."""
+"""The four corners of eq. 22 in the order of ``gpo.floor_image.gpi.front_face_corners``."""
 
 
 def gpi_corners_panel(fisheye_image, camera, placement, mount=None) -> widgets.VBox:
     """Move the four corners of eq. 22 by hand in the front face and see the GPI they give, redrawn on release.
 
-    The sliders (front-face pixels) start at the corners found automatically (``gpo.ground.front_face_corners``
+    The sliders (front-face pixels) start at the corners found automatically (``gpo.floor_image.gpi.front_face_corners``
     for the board lying at ``placement``). Left: the front face with the corners found (circles) and those used
     (the outline); right: the GPI made the paper's way. With ``mount``, the camera's true mount (the simulator
     knows it), it also prints how far the GPI's front-face part puts the floor from where it truly is.

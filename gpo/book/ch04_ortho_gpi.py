@@ -1,6 +1,6 @@
 """Chapter 04, the ortho-rectified GPI and the analytic route: the chessboard route's images, the ortho-GPI's extent
 and the analytic route's mount on sliders, and the analytic route on a real car's fisheyes (Kalibr's sample): its
-ground images and the road's lines fitted in them. The chapter's Table 1 is ``gpo.book.ch04_table1``."""
+ground images and the road's lines fitted in them. The chapter's Table 1 is ``gpo.experiments.table1``."""
 
 from __future__ import annotations
 
@@ -12,20 +12,15 @@ import ipywidgets as widgets
 import matplotlib.pyplot as plt
 import numpy as np
 
-from gpo.book.ch04_table1 import CALIBRATION_ERRORS, PAPER_TABLE1_ERRORS, PICK_ERROR_PX, paper_table1
 from gpo.book.figures import draw_floor_image
 from gpo.book.panels import slider
-from gpo.ground import (
-    FloorImage,
-    GroundImageError,
-    analytic_table,
-    board_corners,
-    ground_plane_image,
-    ortho_rectify,
-    route_difference,
-)
-from gpo.mount import floor_angles
-from gpo.rig import CameraMount
+from gpo.cameras.mount import floor_angles
+from gpo.cameras.rig import CameraMount
+from gpo.experiments.table1 import CALIBRATION_ERRORS, PAPER_TABLE1_ERRORS, PICK_ERROR_PX, paper_table1
+from gpo.floor_image.analytic import analytic_table, route_difference
+from gpo.floor_image.gpi import ground_plane_image
+from gpo.floor_image.image import FloorImage, GroundImageError
+from gpo.floor_image.ortho import board_corners, ortho_rectify
 
 MAX_PANEL_PIXELS = 2_000_000  # floor images larger than this are not redrawn by a panel: too slow to be interactive
 
@@ -113,8 +108,9 @@ def analytic_mount_panel(fisheye_image, camera, mount: CameraMount, reference, p
 
 def draw_ortho_gpi(gpi_image, ortho, ortho_image, truth_px, fitted_px, mount) -> plt.Figure:
     """The chessboard route's result in three panels: the GPI with the 2 x 4 block's 15 corners found in it; the
-    ortho-GPI (``ortho``, a ``gpo.ground.OrthoGPI``, and its image) with the block's outline where it truly lies
-    (``truth_px``, its 15 corners in ortho-GPI pixels in ``gpo.ground.block_corner_indices`` order) and the corners as
+    ortho-GPI (``ortho``, a ``gpo.floor_image.OrthoGPI``, and its image) with the block's outline where it truly lies
+    (``truth_px``, its 15 corners in ortho-GPI pixels in ``gpo.floor_image.ortho.block_corner_indices`` order) and
+    the corners as
     the second homography H_o maps them (``fitted_px``); and the ortho-GPI where it lies in base_link, the camera at
     ``mount``."""
     fig, axes = plt.subplots(1, 3, figsize=(14, 6), gridspec_kw={"width_ratios": [0.56, 1, 0.7]})
@@ -157,8 +153,8 @@ class RoadLine:
 
 def car_ground_images(car_images: dict, cars: dict) -> dict[str, np.ndarray]:
     """The analytic route's ground image (``CAR_FLOORS``) of the Kalibr car's left and front fisheyes: camera name
-    -> grey image. ``car_images`` and ``cars``: ``gpo.datasets.kalibr_car_images()`` and
-    ``gpo.kalibr_car.kalibr_car_cameras()``."""
+    -> grey image. ``car_images`` and ``cars``: ``gpo.io.datasets.kalibr_car_images()`` and
+    ``gpo.io.kalibr_car.kalibr_car_cameras()``."""
     return {
         name: analytic_table(cars[name].camera, cars[name].mount, floor, max_outside=1.0, cache=False).apply(
             car_images[name]

@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gpo.book.panels import slider
-from gpo.kinematics import (
+from gpo.odometry.kinematics import (
     PaperBicycle,
     arc_increment,
     between,
@@ -21,9 +21,9 @@ from gpo.kinematics import (
 
 
 def draw_heading_rate_ratio(wheelbase_m: float, rear_to_reference_m, ax=None, max_steering_deg: float = 60.0):
-    """Eq. (30)'s heading rate over the true one (``gpo.kinematics.paper_heading_rate_ratio``) against the steering
-    angle, one curve per reference point l_r in ``rear_to_reference_m`` (metres, a number or a sequence)."""
-    from gpo.kinematics import paper_heading_rate_ratio
+    """Eq. (30)'s heading rate over the true one (``gpo.odometry.kinematics.paper_heading_rate_ratio``) against the
+    steering angle, one curve per reference point l_r in ``rear_to_reference_m`` (metres, a number or a sequence)."""
+    from gpo.odometry.kinematics import paper_heading_rate_ratio
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 4))
@@ -128,7 +128,7 @@ def constant_steering_paths(
 ) -> tuple[np.ndarray, np.ndarray]:
     """base_link's poses (N + 1, 3) over ``duration_s`` of a drive whose virtual front wheel (L ahead of the rear
     axle) moves at ``speed_mps`` in the constant direction ``steering_rad`` in base_link: the exact motion (circular
-    arcs, ``gpo.kinematics.exact_velocities`` and ``arc_increment``) and what the first paper's model
+    arcs, ``gpo.odometry.kinematics.exact_velocities`` and ``arc_increment``) and what the first paper's model
     (``PaperBicycle(wheelbase_m, rear_to_reference_m)``, eqs. 25-34) makes of it, fed each frame (``rate_hz``) with
     the front wheel's displacement as the floor image shows it."""
     dt = 1.0 / rate_hz

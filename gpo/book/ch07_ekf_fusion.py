@@ -14,8 +14,8 @@ from matplotlib.ticker import FuncFormatter
 from gpo.book.figures import draw_placed_paths
 from gpo.book.panels import slider
 from gpo.fusion import FilterDiverged, FusionSettings, OdometryFusion, fuse, increment_covariance
-from gpo.kinematics import arc_increment
 from gpo.metrics import final_error, place_on_truth
+from gpo.odometry.kinematics import arc_increment
 
 
 def draw_paths_on_truth(paths: dict, truth, ax=None, styles: dict | None = None) -> plt.Axes:
@@ -88,7 +88,7 @@ def fusion_panel(floor, tracking, truth, settings: FusionSettings | None = None,
     steps inside it not fused); and, when ``drifted`` is given, the tracking camera's drift (scale error %, yaw bias
     mrad/s). On each release ``gpo.fusion.fuse`` runs again.
 
-    ``floor``: the floor odometry with its flow's inlier counts (a ``gpo.pipeline.FloorRun``, or anything with its
+    ``floor``: the floor odometry with its flow's inlier counts (a ``gpo.pipeline.run.FloorRun``, or anything with its
     ``trajectory``, ``inliers`` and ``spread_px``); ``tracking``: the tracking camera's path of base_link;
     ``truth``: the true path; ``settings``: the ``FusionSettings`` the sliders start from (default: the package's);
     ``drifted(scale_error, yaw_bias_radps)``: the tracking camera's path with that drift (then ``tracking`` is unused).

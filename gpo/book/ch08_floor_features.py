@@ -1,6 +1,6 @@
 """Chapter 08, the second paper's floor feature odometer: a recording's frames, keypoints, matches by fate, the
 histogram filter and the invariance check's loops, and the odometer's panel on one frame pair (the chapter's Table 2
-is ``gpo.book.ch08_table2``)."""
+is ``gpo.experiments.table2``)."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ import numpy as np
 from matplotlib.collections import LineCollection, PatchCollection, PolyCollection
 from matplotlib.patches import Circle
 
-from gpo.bag import Recording
 from gpo.book.panels import int_slider, slider
-from gpo.features import DETECTORS, FeatureParameters, FeatureTracker, detect
+from gpo.io.bag import Recording
+from gpo.motion.keypoints import DETECTORS, FeatureParameters, FeatureTracker, detect
 
 
 def frames_of(bag, start: int = 0, stop: int | None = None) -> list[tuple[int, np.ndarray]]:
@@ -50,8 +50,8 @@ def _frame(image, ax=None) -> plt.Axes:
 
 
 def draw_keypoints(image, keypoints, ax=None) -> plt.Axes:
-    """A grey frame (H, W) with its keypoints (``gpo.features.Keypoints``, pixels of the full image), each a circle
-    of its diameter ``size``."""
+    """A grey frame (H, W) with its keypoints (``gpo.motion.keypoints.Keypoints``, pixels of the full image), each a
+    circle of its diameter ``size``."""
     ax = _frame(image, ax)
     circles = [Circle(point, size / 2) for point, size in zip(keypoints.points, keypoints.sizes, strict=True)]
     ax.add_collection(PatchCollection(circles, facecolor="none", edgecolor="yellow", lw=0.8))
@@ -68,7 +68,7 @@ MATCH_FATES = {  # a match's fate -> its colour
 
 
 def match_fates(matches) -> dict[str, np.ndarray]:
-    """Which of the M matches of a ``gpo.features.FeatureMatches`` met each fate of ``MATCH_FATES`` (M,) bool. A
+    """Which of the M matches of a ``gpo.motion.keypoints.FeatureMatches`` met each fate of ``MATCH_FATES`` (M,) bool. A
     frame flagged before any stage ran keeps none: its matches are all "not filtered: frame flagged"."""
     through_histogram = matches.histogram_kept
     unfiltered = matches.flag is not None and matches.histogram is None and matches.invariance is None
@@ -81,7 +81,8 @@ def match_fates(matches) -> dict[str, np.ndarray]:
 
 
 def draw_feature_matches(image, matches, ax=None) -> plt.Axes:
-    """The current grey frame (H, W) with every match of a ``gpo.features.FeatureMatches``: a line from its start
+    """The current grey frame (H, W) with every match of a ``gpo.motion.keypoints.FeatureMatches``: a line from its
+    start
     (previous frame) to its end (this frame), pixels of the full image, with a dot at the end, coloured by its fate
     (``MATCH_FATES``, the flagged frame's only when it has some); the legend counts each fate."""
     ax = _frame(image, ax)
@@ -99,7 +100,7 @@ def draw_feature_matches(image, matches, ax=None) -> plt.Axes:
 
 
 def draw_match_histogram(stage, ax=None, label: str = "orientation (deg)") -> plt.Axes:
-    """One histogram of the filter (a ``gpo.features.HistogramStage``) as bars over ``label``, the values' unit
+    """One histogram of the filter (a ``gpo.motion.keypoints.HistogramStage``) as bars over ``label``, the values' unit
     (degrees for the orientation, pixels for the length), with lines at its mean mu and at mu +- sigma and that band
     shaded; the filter keeps a band never narrower than the keypoints' localisation, so it may keep a little more.
     An empty histogram (mean NaN) is drawn without the lines."""
@@ -121,7 +122,8 @@ def draw_match_histogram(stage, ax=None, label: str = "orientation (deg)") -> pl
 
 def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.Axes:
     """The loops of the invariance check (the second paper's Algorithm 1, its Figs. 7-8) of a
-    ``gpo.features.FeatureMatches`` on the previous grey frame (H, W): each a closed polygon through its matches'
+    ``gpo.motion.keypoints.FeatureMatches`` on the previous grey frame (H, W): each a closed polygon through its
+    matches'
     start points, pixels of the full image, kept loops green and rejected ones red, at most ``max_loops`` of each
     (the first tried). When the check did not run, only the frame."""
     ax = _frame(image, ax)
@@ -150,7 +152,7 @@ HISTOGRAM_FATES = {  # which histogram dropped a match -> its colour
 
 def draw_histogram_decisions(image, matches, ax=None, scale: float = 5.0, centre_px=None) -> plt.Axes:
     """The histogram filter's decisions (the second paper's mu +- sigma bands) on the grey frame (H, W): each match
-    vector of a ``gpo.features.FeatureMatches`` drawn from its start, ``scale`` times its length, coloured by
+    vector of a ``gpo.motion.keypoints.FeatureMatches`` drawn from its start, ``scale`` times its length, coloured by
     ``HISTOGRAM_FATES``. ``centre_px`` (u, v), pixels: the centre of the frame pair's rotation, marked with a cross,
     or when outside the frame, an arrow from the frame's centre towards it. When the filter did not run, only the
     frame."""
@@ -252,7 +254,7 @@ def feature_panel(previous_image, current_image, parameters: FeatureParameters |
 
 
 def feature_matches_text(matches) -> str:
-    """One line about a ``gpo.features.FeatureMatches``: the matches left after each stage that ran, the flag if
+    """One line about a ``gpo.motion.keypoints.FeatureMatches``: the matches left after each stage that ran, the flag if
     any, and each stage's wall time in milliseconds."""
     counts = [f"{len(matches.pairs)} matches"]
     if matches.histogram is not None:

@@ -1,5 +1,5 @@
 """Chapter 09, evaluation: evo's own command line beside ``gpo.metrics``, evaluated paths over the truth and their
-errors along the distance, Table 4's rows (``gpo.book.ch09_table4``) compared and drawn, the EKF's knobs tried on
+errors along the distance, Table 4's rows (``gpo.experiments.table4``) compared and drawn, the EKF's knobs tried on
 Table 4's inputs, a panel over every row under the alignment chosen, and the population benchmark's fisheye draws
 beside the same worlds with their floors matte."""
 
@@ -20,13 +20,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 from evo.tools import file_interface
 
-from gpo.bag import Recording
-from gpo.book.ch09_table4 import PATHS
 from gpo.book.figures import draw_placed_paths
-from gpo.book.runs import floor_run, route_config
+from gpo.experiments.runs import floor_run, route_config
+from gpo.experiments.table4 import PATHS
 from gpo.fusion import FusionSettings, fuse
+from gpo.io.bag import Recording
 from gpo.metrics import MAX_STAMP_DIFFERENCE_S, Alignment, evaluate, final_error
-from gpo.pipeline import tracking_path
+from gpo.pipeline.run import tracking_path
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
 
@@ -65,7 +65,7 @@ def draw_evaluation_errors(evaluations: dict, ax=None, styles: dict | None = Non
 
 
 def evaluation_panel(table, shown: tuple | None = None) -> widgets.VBox:
-    """Every row of a Table 4 (``gpo.book.ch09_table4.Table4``) on one path, under the alignment chosen.
+    """Every row of a Table 4 (``gpo.experiments.table4.Table4``) on one path, under the alignment chosen.
 
     ``table.evaluations[row][path]`` holds each row's estimate placed on the truth at its first pose (``origin``,
     shown as it is); for ``se2``, ``se3`` or ``posyaw`` the panel aligns it again (``gpo.metrics.evaluate``, once
@@ -139,8 +139,9 @@ def evo_ape_statistics(truth_file: Path, estimate_file: Path, flags: list[str]) 
 
 
 def fusion_inputs(paths=PATHS, settings: FusionSettings | None = None) -> dict[str, tuple]:
-    """path -> (GPO's floor run on the ortho-GPI, kept on disk (``gpo.book.runs.floor_run``); the tracking camera's
-    path of base_link (``gpo.pipeline.tracking_path`` with ``settings``, default the package's); the truth)."""
+    """path -> (GPO's floor run on the ortho-GPI, kept on disk (``gpo.experiments.runs.floor_run``); the tracking
+    camera's
+    path of base_link (``gpo.pipeline.run.tracking_path`` with ``settings``, default the package's); the truth)."""
     settings = settings or FusionSettings()
     inputs = {}
     for path in paths:

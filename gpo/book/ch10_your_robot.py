@@ -2,29 +2,30 @@
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import io
+import subprocess
+import sys
 
 import numpy as np
 
-from gpo.__main__ import main
-from gpo.bag import Recording
+from gpo.cameras.rig import CameraMount
+from gpo.io.bag import Recording
 from gpo.metrics import final_error
-from gpo.pipeline import OdometryConfig, run
-from gpo.rig import CameraMount
+from gpo.pipeline.config import OdometryConfig
+from gpo.pipeline.run import run
 
 
 def command(*arguments) -> None:
-    """``python -m gpo ARGUMENTS``, run in this process: print what it prints, its errors as it prints them
+    """``python -m gpo ARGUMENTS``, run as a user runs it (a process of its own): print what it prints, then its errors
     (progress bars left out) and its exit code."""
-    errors = io.StringIO()
-    with contextlib.redirect_stderr(errors):
-        code = main([str(argument) for argument in arguments])
-    for line in errors.getvalue().splitlines():
+    finished = subprocess.run(
+        [sys.executable, "-m", "gpo", *(str(argument) for argument in arguments)], capture_output=True, text=True
+    )
+    print(finished.stdout, end="")
+    for line in finished.stderr.splitlines():
         if "%|" not in line:  # the progress bars
             print(line)
-    print(f"(exit code {code})")
+    print(f"(exit code {finished.returncode})")
 
 
 def mistaken_mounts(mount: CameraMount) -> dict[str, CameraMount]:

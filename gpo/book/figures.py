@@ -9,7 +9,8 @@ from matplotlib.transforms import Affine2D
 
 
 def draw_paths(paths: dict, ax=None, styles: dict | None = None) -> plt.Axes:
-    """Top view of trajectories (label -> ``gpo.trajectory.Trajectory``), x and y in metres, with the start marked."""
+    """Top view of trajectories (label -> ``gpo.io.trajectory.Trajectory``), x and y in metres, with the start
+    marked."""
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 5))
     styles = styles or {}
@@ -46,7 +47,8 @@ def draw_placed_paths(placed: dict, truth, ax=None, styles: dict | None = None, 
 
 
 def draw_floor_image(image, floor, ax=None, mount=None, axes_length: float = 0.1) -> plt.Axes:
-    """A floor image (``gpo.ground.FloorImage`` ``floor``) drawn where it lies in ``base_link``, seen from above.
+    """A floor image (``gpo.floor_image.image.FloorImage`` ``floor``) drawn where it lies in ``base_link``, seen from
+    above.
 
     Forward (+x) is up and left (+y) to the left, in metres; every pixel is put where ``floor.affine`` puts it, so
     a GPI, an ortho-GPI and an analytic image line up on the same axes. base_link's origin is drawn with its x

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gpo.camera import EUCM, Pinhole
+from gpo.cameras import EUCM, Pinhole
+from gpo.cameras.targets import Chessboard
 from gpo.sim.render import render_board_view
-from gpo.targets import Chessboard
 
 CALIBRATION_BOARD = Chessboard((8, 6), 0.030, 0.020)
 

@@ -9,8 +9,8 @@ effect applied to the frames rendered inside an ``Outage``'s interval, so the re
   (image rows, the floor's motion in the fisheye's lower half) over ``FAST_SMEAR_PX`` pixels;
 - ``lifted``: the robot's front lifted off the floor (a bump, a ramp's lip): the floor out of focus and in shadow.
 
-Each leaves too little local contrast, or too few trackable corners, for the floor flow (``gpo.flow``), which flags
-the frames; none changes the motion, the ground truth or the tracking camera.
+Each leaves too little local contrast, or too few trackable corners, for the floor flow (``gpo.motion.klt``), which
+flags the frames; none changes the motion, the ground truth or the tracking camera.
 """
 
 from __future__ import annotations

@@ -23,12 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
-from gpo.camera import EUCM, Pinhole
-from gpo.rig import CameraMount, Rig
+from gpo.cameras import EUCM, Pinhole
+from gpo.cameras.rig import CameraMount, Rig
+from gpo.sim.drift import TrackingDrift
 from gpo.sim.floors import DEFAULT_PHOTOS, FLOOR_KINDS, PHOTOS, FloorDesign
-from gpo.sim.motion import Arc, Bend, MotionPlan, Segment, Slide, Spin, Stop, Straight, TrackingDrift
+from gpo.sim.plans import MotionPlan
 from gpo.sim.record import Setup, preset, recording
 from gpo.sim.rigs import downward_rig, t265_rig
+from gpo.sim.segments import Arc, Bend, Segment, Slide, Spin, Stop, Straight
 
 # the ranges draws are uniform in: (low, high)
 FISHEYE = {
@@ -54,7 +56,7 @@ DOWNWARD = {
     "centre_px": (-8.0, 8.0),
 }
 MIN_FOOTPRINT_M = 3.5e-4  # the floor texture's texels are 0.5 mm; a pixel's footprint keeps above 0.35 mm
-DRIFT = {  # the tracking camera's drift about gpo.sim.motion.T265_DRIFT's
+DRIFT = {  # the tracking camera's drift about gpo.sim.drift.T265_DRIFT's
     "scale_error": (-0.03, 0.03),
     "yaw_bias_radps": (-2e-3, 2e-3),
     "yaw_walk_rad_per_sqrt_s": (0.5e-3, 2e-3),
@@ -67,8 +69,7 @@ SPIN_RATE_RADPS = (0.35, 0.7)
 MIX_SHARE = 0.4  # the share of floors mixing two kinds
 OTHER_PHOTOS_SHARE = 0.5  # the share of floors whose grain comes from other photographs than the presets'
 SEGMENT_WEIGHTS = {  # kind -> weight; slides only for the omnidirectional robot of the downward camera
-    "straight": 0.32,
-    "reverse": 0.12,
+    "straight": 0.32, "reverse": 0.12,
     "arc": 0.14,
     "bend": 0.16,
     "spin": 0.14,

@@ -24,13 +24,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
-from gpo import cache
-from gpo.bag import BagWriter
-from gpo.fisheye import KB4
-from gpo.rig import OPTICAL_IN_BODY, CameraMount, Rig
+from gpo.cameras import KB4
+from gpo.cameras.rig import OPTICAL_IN_BODY, CameraMount, Rig
+from gpo.io import cache
+from gpo.io.bag import BagWriter
+from gpo.io.fingerprint import sources
+from gpo.sim.drift import T265_DRIFT, tracking_odometry
 from gpo.sim.floors import make_floor
-from gpo.sim.motion import T265_DRIFT, named_plan, tracking_odometry
-from gpo.sim.record import FLOOR_MARGIN_M, GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, START_NS, TEXEL_M, fingerprint_sources
+from gpo.sim.paths import named_plan
+from gpo.sim.record import FLOOR_MARGIN_M, GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, START_NS, TEXEL_M
 from gpo.sim.record import floor_extent as _floor_extent
 from gpo.sim.render import FloorRenderer
 
@@ -63,7 +65,7 @@ class RealsenseRig:
         return np.array(self.position_m, dtype=float), Rotation.from_euler("ZYX", np.radians(self.rpy_deg[::-1]))
 
     def rig(self) -> Rig:
-        """The fisheye's ``gpo.rig.Rig``: its optical frame's mount in base_link, the realsense-ros names."""
+        """The fisheye's ``gpo.cameras.rig.Rig``: its optical frame's mount in base_link, the realsense-ros names."""
         position, rotation = self.pose_in_base
         mount = CameraMount(position + rotation.apply(FISHEYE1_IN_POSE), rotation * OPTICAL_IN_BODY)
         return Rig(self.name, self.lens, mount, self.rate_hz, IMAGE_TOPIC, INFO_TOPIC, OPTICAL_FRAME)
@@ -111,8 +113,7 @@ def realsense_recording(rig_name: str = "t265", path: str = "test", format: str 
     sources)."""
     if rig_name not in RIGS:
         raise ValueError(f"unknown realsense rig {rig_name!r}; the rigs are {', '.join(RIGS)}")
-    sources = [*fingerprint_sources(), Path(__file__).resolve()]
-    key = cache.key(asdict(RIGS[rig_name]), path, format, seed, sources=sources)
+    key = cache.key(asdict(RIGS[rig_name]), path, format, seed, sources=sources(__name__))
     target = cache.path("recordings", f"realsense-{rig_name}-{path}", key, ".bag" if format == "ros1" else "")
     if not target.exists():
         cache.write(target, lambda partial: simulate_realsense(rig_name, path, partial, format, seed, progress=False))

@@ -32,17 +32,20 @@ import cv2
 import numpy as np
 from tqdm.auto import tqdm
 
-from gpo import cache
-from gpo.bag import BagWriter
-from gpo.calibfiles import camera_to_kalibr
-from gpo.rig import Rig
+from gpo.cameras.files import camera_to_kalibr
+from gpo.cameras.rig import Rig
+from gpo.cameras.targets import Chessboard, FloorBoard
+from gpo.io import cache
+from gpo.io.bag import BagWriter
+from gpo.io.fingerprint import sources
+from gpo.io.trajectory import Trajectory
+from gpo.sim.drift import T265_DRIFT, TrackingDrift, tracking_odometry
 from gpo.sim.floors import FloorDesign, make_floor
-from gpo.sim.motion import T265_DRIFT, MotionPlan, TrackingDrift, named_plan, tracking_odometry
 from gpo.sim.outages import Outage, apply_outage, outage_at
+from gpo.sim.paths import named_plan
+from gpo.sim.plans import MotionPlan
 from gpo.sim.render import Disturbances, FloorRenderer
 from gpo.sim.rigs import RIGS
-from gpo.targets import Chessboard, FloorBoard
-from gpo.trajectory import Trajectory
 
 START_NS = 1_700_000_000 * 1_000_000_000  # 2023-11-14 22:13:20 UTC: the first stamp of every recording
 GROUND_TRUTH_TOPIC = "/mocap/base_link"
@@ -121,8 +124,7 @@ class Setup:
             },
             "plan": {
                 "segments": [[type(segment).__name__, asdict(segment)] for segment in plan.segments],
-                "start": list(plan.start),
-                "limits": asdict(plan.limits),
+                "start": list(plan.start), "limits": asdict(plan.limits),
             },
             "floor": asdict(self.floor),
             "seed": self.seed,
@@ -153,14 +155,12 @@ PRESETS = {
     **{
         f"long{k}": Preset(
             "t265", f"long{k}", "raised", 20 + k, f"the fisheye rig, 12-17 m path {k} (Test{k + 3})", exposure_s=0.006
-        )
-        for k in (1, 2, 3)
+        ) for k in (1, 2, 3)
     },
     **{
         f"downward-{kind}": Preset(
             "downward", "downward-short", kind, 30 + k, f"the downward camera over a {kind} floor, 4.3 m"
-        )
-        for k, kind in enumerate(("wood", "raised", "industrial"))
+        ) for k, kind in enumerate(("wood", "raised", "industrial"))
     },
     "downward-long": Preset("downward", "downward-long", "wood", 33, "the downward camera over a wood floor, 16.5 m"),
     # the second paper's experiments (its Tables 1 and 2): the downward camera on a cart (I-II), on the linear and
@@ -347,20 +347,6 @@ def _write_static_tree(bag: BagWriter, setup: Setup) -> None:
         )
 
 
-def fingerprint_sources() -> list[Path]:
-    """The sources of the modules ``simulate`` runs, which the recording cache's key hashes.
-
-    Only those: the tables that read recordings (``table1``, ``table4``) change without re-rendering them.
-    """
-    package = Path(__file__).resolve().parents[1]
-    return [
-        *(package / "sim" / f"{name}.py" for name in ("floors", "motion", "outages", "record", "render", "rigs")),
-        *(
-            package / f"{name}.py"
-            for name in ("bag", "calibfiles", "camera", "fisheye", "rig", "targets", "trajectory")
-        ),
-    ]
-
 
 def recording(
     what: str | Setup = "sample",
@@ -371,16 +357,17 @@ def recording(
     label: str | None = None,
 ) -> Path:
     """The bag of ``what``: a preset's name (with ``seed`` in place of its own, when given) or a ``Setup``;
-    generated on first use, then read from the cache (``gpo.cache``, ``recordings``, named ``label``: by default
+    generated on first use, then read from the cache (``gpo.io.cache``, ``recordings``, named ``label``: by default
     the preset's name, or the rig's for a setup).
 
     Its key holds the setup (``Setup.description``), the format and the simulator's sources
-    (``fingerprint_sources``). Each process renders into a file of its own and renames it into place when complete,
+    (``gpo.io.fingerprint.sources`` of this module: the simulator and what it runs). Each process renders into a file
+    of its own and renames it into place when complete,
     so processes that want the same recording at once never read one another's half-written bag (the files are
     identical). ``jobs``: processes rendering its frames.
     """
     setup, own_label = setup_of(what, seed)
-    key = cache.key(setup.description(), format, sources=fingerprint_sources())
+    key = cache.key(setup.description(), format, sources=sources(__name__))
     path = cache.path("recordings", label or own_label, key, ".bag" if format == "ros1" else "")
     if not path.exists():
         cache.write(path, lambda partial: simulate(what, partial, format, progress, seed, jobs))

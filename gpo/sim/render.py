@@ -33,14 +33,15 @@ import numpy as np
 import skimage.data
 from scipy.spatial.transform import Rotation
 
-from gpo.camera import EUCM, Pinhole
-from gpo.rig import Rig, floor_points, rays_in_base
+from gpo.cameras import EUCM, Pinhole
+from gpo.cameras.rig import Rig, floor_points, rays_in_base
+from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.sim.floors import FloorTexture, mip_pyramid
-from gpo.targets import Chessboard, FloorBoard
 
 BLACK, WHITE = 20.0, 220.0  # grey levels of a chessboard's black and white under the scene's light
 CHUNK = 4096  # cv2.remap takes at most 32767 rows, so pixel lists are remapped as (n / CHUNK, CHUNK) maps
-GPI_PATCH_M = (0.70, 0.90, -0.10, 0.10)  # the ortho-GPI's floor (gpo.ground.FloorImage.top_view): x, y in base_link, m
+# the ortho-GPI's floor (gpo.floor_image.image.FloorImage.top_view): x, y in base_link, m
+GPI_PATCH_M = (0.70, 0.90, -0.10, 0.10)
 SHEET_PAD = 2  # transparent texels around a printed sheet, so that its edge fades out in bilinear lookups
 
 
@@ -591,7 +592,27 @@ def _wrap(values: np.ndarray, period: float) -> np.ndarray:
 
 
 def _remap_points(texture: np.ndarray, u: np.ndarray, v: np.ndarray, border: int) -> np.ndarray:
-    """Bilinear samples of ``texture`` (H, W) or (H, W, C) at the points (u, v) (pixel units), as float32 (N,) or
+    """Bilinear
+    samples
+    of
+    ``texture``
+    (H,
+    W)
+    or
+    (H,
+    W,
+    C)
+    at
+    the
+    points
+    (u,
+    v)
+    (pixel
+    units),
+    as
+    float32
+    (N,)
+    or
     (N, C)."""
     count = len(u)
     rows = -(-count // CHUNK)

@@ -1,14 +1,14 @@
 """The two camera rigs of the simulator, like the two papers' robots.
 
-``Rig`` and ``CameraMount`` (and their frames) are defined in ``gpo.rig``.
+``Rig`` and ``CameraMount`` (and their frames) are defined in ``gpo.cameras.rig``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gpo.camera import T265_LIKE, Pinhole
-from gpo.rig import CameraMount, Rig
+from gpo.cameras import T265_LIKE, Pinhole
+from gpo.cameras.rig import CameraMount, Rig
 
 
 def t265_rig() -> Rig:

@@ -1,0 +1,86 @@
+"""A sweep's results as one table: ``results.parquet`` and ``results.csv``, a row per run, read and summarised.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+RESULTS = ("results.parquet", "results.csv")
+
+
+def _json_number(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"cannot write {value!r} into a row")
+
+
+def read_rows(out) -> list[dict]:
+    """Every run's row kept in ``out/runs``."""
+    rows = []
+    for path in sorted(Path(out).glob("runs/*/row.json")):
+        rows.append(json.loads(path.read_text()))
+    return rows
+
+
+def write_table(out, rows=None) -> pd.DataFrame:
+    """Gather ``rows`` (default: ``out/runs/*/row.json``) into ``results.parquet`` and ``results.csv`` in ``out``
+    (each written to a temporary name, then renamed); return the table, sorted by recording and parameters."""
+    out = Path(out)
+    table = pd.DataFrame(list(read_rows(out) if rows is None else rows))
+    if table.empty:
+        return table
+    parameters = parameter_columns(table)
+    for column in parameters:  # a parameter that took numbers in one sweep and text in another: text
+        kinds = {type(v) for v in table[column] if v is not None and not (isinstance(v, float) and math.isnan(v))}
+        if len(kinds) > 1 and kinds != {int, float}:
+            table[column] = table[column].map(lambda v: None if v is None else str(v))
+    table[parameters] = table[parameters].convert_dtypes()  # whole numbers stay whole beside missing ones
+    table = table.sort_values(["recording", *parameters, "key"], na_position="first", ignore_index=True)
+    for name, write in zip(RESULTS, (table.to_parquet, table.to_csv), strict=True):
+        temporary = out / f".{name}.partial"
+        write(temporary, index=False)
+        temporary.replace(out / name)
+    return table
+
+
+def read_table(out) -> pd.DataFrame:
+    """The table a sweep wrote into ``out`` (``results.parquet``). Raises FileNotFoundError naming the folder."""
+    path = Path(out) / RESULTS[0]
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no sweep results here (python -m gpo sweep SPEC --out {out})")
+    return pd.read_parquet(path)
+
+
+def parameter_columns(table: pd.DataFrame) -> list[str]:
+    """The table's override columns (``param.<dotted key>``), in order."""
+    return [c for c in table.columns if c.startswith("param.")]
+
+
+def summary_text(table: pd.DataFrame, speed: bool = True) -> str:
+    """The table for people: one line per run, errors in %, mm and degrees, and (``speed``) frames per second."""
+    if table.empty:
+        return "no runs"
+    columns = ["recording", *parameter_columns(table), "status"]
+    shown = table[columns].copy()
+    shown.columns = [c.removeprefix("param.") for c in columns]
+    metrics = {
+        "final %": ("final_error_percent", 1.0, 3),
+        "final mm": ("final_error_m", 1e3, 1),
+        "heading deg": ("final_heading_deg", 1.0, 2),
+        "APE rmse mm": ("ape_rmse_m", 1e3, 1),
+        "frames/s": ("frames_per_second", 1.0, 1),
+    }
+    if not speed:
+        del metrics["frames/s"]
+    for label, (column, scale, digits) in metrics.items():
+        values = table[column] if column in table else pd.Series([None] * len(table))
+        shown[label] = (pd.to_numeric(values, errors="coerce") * scale).round(digits)
+    lines = [shown.to_string(index=False, na_rep="-")]
+    for _, row in table[table["status"] != "ok"].iterrows():
+        lines.append(f"{row['recording']} {row['key']}: {row['status']}: {row['error']}")
+    return "\n".join(lines)

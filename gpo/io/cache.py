@@ -1,0 +1,137 @@
+"""The one folder where gpo keeps what it makes once and reads back, and the one way its files are named.
+
+The folder is ``$GPO_CACHE_DIR`` when that is set, else the user's cache folder for gpo (``pooch.os_cache("gpo")``,
+e.g. ``~/.cache/gpo``). Each kind of file has a subfolder of its own (``folder``): ``tables`` (the floor image's
+remap tables, ``gpo.floor_image``), ``recordings`` (the simulated bags, ``gpo.sim.record``), ``runs`` (the floor runs
+of the papers' tables), ``datasets`` (downloaded real files, ``gpo.io.datasets``, unless ``$GPO_DATA_DIR`` names a
+folder of copies).
+
+A file's name ends in its ``key``: the first 16 hex digits of the sha256 of everything it is made from, written as
+canonical JSON, and of the source files that make it, so that a changed input or a changed program makes a new
+file instead of reading a stale one. ``write`` makes a file under a name of its own (the process id) and renames it
+into place, so processes sharing the folder never read one another's half-written files.
+
+A changed program leaves the files of the old one behind (a full set of recordings is about 6 GB), so the cache is
+kept within ``MAX_BYTES``: after each ``write``, the oldest files of the kinds that can be made again
+(``EVICTED_KINDS``; downloads stay) are deleted until it fits. A file still in use but old is made again when next
+wanted.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import shutil
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import pooch
+
+ENVIRONMENT_VARIABLE = "GPO_CACHE_DIR"
+KINDS = ("tables", "recordings", "runs", "datasets")
+MAX_BYTES = 30 * 2**30  # beyond this the oldest files that can be made again go, 5 full sets of recordings
+EVICTED_KINDS = ("tables", "recordings", "runs")
+KEY_DIGITS = 12  # significant digits of a float in a key: far above any setting's precision, below rounding's
+
+
+def root() -> Path:
+    """The cache folder: ``$GPO_CACHE_DIR``, else the user's cache folder for gpo."""
+    return Path(os.environ.get(ENVIRONMENT_VARIABLE) or pooch.os_cache("gpo")).expanduser()
+
+
+def folder(kind: str) -> Path:
+    """The subfolder of the cache for files of ``kind`` (one of ``KINDS``)."""
+    if kind not in KINDS:
+        raise ValueError(f"unknown cache kind {kind!r}; the kinds are {', '.join(KINDS)}")
+    return root() / kind
+
+
+def key(*parts, sources: Iterable[Path] = ()) -> str:
+    """16 hex digits of the sha256 of ``parts`` (JSON: numbers, strings, lists, dicts; anything else as its
+    ``str``) and of the bytes of each file in ``sources``.
+
+    Floats count to ``KEY_DIGITS`` significant digits: a value computed on another floating-point path (another
+    BLAS kernel, another SIMD level) differs in its last bits, and names the same file."""
+    digest = hashlib.sha256(json.dumps(_rounded(parts), sort_keys=True, default=str).encode())
+    for source in sources:
+        digest.update(Path(source).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _rounded(value):
+    """``value`` with every float rounded to ``KEY_DIGITS`` significant digits, in lists, tuples and dicts too."""
+    if isinstance(value, float):
+        return float(f"{value:.{KEY_DIGITS}g}")
+    if isinstance(value, dict):
+        return {name: _rounded(item) for name, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_rounded(item) for item in value]
+    return value
+
+
+def path(kind: str, name: str, file_key: str, suffix: str = "") -> Path:
+    """The cache path ``<folder(kind)>/<name>-<file_key><suffix>``."""
+    return folder(kind) / f"{name}-{file_key}{suffix}"
+
+
+def write(target: Path, save: Callable[[Path], object]) -> Path:
+    """Make ``target`` with ``save(partial)``, which writes a file (or a folder) at the path it is given: a name of
+    this process's own beside ``target``, renamed to ``target`` once complete. When another process got there
+    first, its file stays and this one's is removed (cached files of one name are identical). Returns ``target``."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    partial = target.with_name(f"{target.stem}-partial-{os.getpid()}{target.suffix}")
+    _remove(partial)
+    try:
+        save(partial)
+    except BaseException:
+        _remove(partial)
+        raise
+    if target.exists():
+        _remove(partial)
+    else:
+        partial.rename(target)
+    evict(keep=target)
+    return target
+
+
+def evict(keep: Path | None = None, max_bytes: int | None = None) -> list[Path]:
+    """Delete the oldest (by modification time) files and folders of ``EVICTED_KINDS`` until the cache holds at
+    most ``max_bytes`` (default ``MAX_BYTES``) in them; never ``keep``, nor another process's partial file. Returns
+    what was deleted, oldest first."""
+    limit = MAX_BYTES if max_bytes is None else max_bytes
+    entries = []
+    for kind in EVICTED_KINDS:
+        for entry in folder(kind).glob("*") if folder(kind).is_dir() else ():
+            if "-partial-" in entry.name or entry == keep:
+                continue
+            try:
+                entries.append((entry.stat().st_mtime, _size(entry), entry))
+            except OSError:  # removed by another process meanwhile
+                continue
+    total = sum(size for _, size, _ in entries) + (_size(keep) if keep is not None and keep.exists() else 0)
+    deleted = []
+    for _, size, entry in sorted(entries, key=lambda item: item[0]):
+        if total <= limit:
+            break
+        with contextlib.suppress(OSError):  # another process removed it first
+            _remove(entry)
+        total -= size
+        deleted.append(entry)
+    return deleted
+
+
+def _size(path: Path) -> int:
+    """Bytes of the file, or of every file below the folder, ``path``."""
+    if path.is_dir():
+        return sum(item.stat().st_size for item in path.rglob("*") if item.is_file())
+    return path.stat().st_size
+
+
+def _remove(path: Path) -> None:
+    """Delete the file or folder ``path`` if it exists."""
+    if path.is_dir():
+        shutil.rmtree(path)
+    elif path.exists():
+        path.unlink()

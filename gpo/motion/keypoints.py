@@ -1,0 +1,533 @@
+"""How the floor moves between two frames, from matched keypoints: the second paper's floor feature odometer.
+
+Chapter 08. The second paper's AGV carries a monocular pinhole camera that looks straight down at the floor. Each
+frame's keypoints are matched with the previous frame's, two filters throw out the wrong matches, and a rigid 2-D
+transform A_i^{i-1} = (theta, Tx, Ty) fitted to the rest, in metres, is the robot's motion over the frame. The
+poses are composed, A_i^0 = A_1^0 A_2^1 ... A_i^{i-1} (its eq. 4). This module does the image and point work only;
+the caller turns the kept pixels into floor points, fits the transform (``gpo.odometry.kinematics.rigid_fit``, or
+``increment_from_point_pairs`` for the robot's increment) and composes it (``gpo.odometry.kinematics.compose``).
+
+- **Keypoints** (``detect``): the paper uses SURF, which OpenCV's PyPI wheels do not include (it is patented and
+  lives in the non-free contrib module), so SIFT stands in for it, and ORB is the fast option. A keypoint is
+  dropped when its descriptor's support, a disc about it, leaves the image or touches a masked pixel (a light
+  spot, the robot's shadow): that descriptor would describe the border or the spot, which move with the camera,
+  not the floor. The disc's radius is ``SUPPORT_PER_SIZE`` times the keypoint's diameter (``cv2.KeyPoint.size``):
+  half of it for ORB, whose 31 x 31 patch at the keypoint's pyramid level is ``size`` wide; three times it for
+  SIFT, half the side of its 4 x 4 grid of histograms, each three keypoint scales (``size / 2``) wide (the grid's
+  turned corners reach further, where its Gaussian weight has fallen below 0.6).
+- **Matching** (``match``): the two nearest descriptors of each previous keypoint among the current ones
+  (``cv2.BFMatcher``: Hamming distance for ORB, Euclidean for SIFT); a match is kept when the nearest is clearly
+  nearer than the second (Lowe's ratio test) and, optionally, when it is mutual (the cross check).
+- **Histogram filter** (``histogram_filter``): between two close frames a rigid motion moves every floor point by
+  about the same vector d = end - start. The orientations of the vectors are binned, the matches within mu +- sigma
+  of that histogram are kept, then the same is done with the kept vectors' lengths.
+- **Geometric invariance check** (``invariance_check``, the paper's Algorithm 1): a rigid motion keeps distances.
+  Random groups of C matches form closed loops p_1 -> ... -> p_C -> p_1 in both frames; a group is kept when every
+  side keeps its length, min(l, l^) / max(l, l^) >= t, and a match is kept when it lies in a kept loop.
+- ``degenerate`` tells the caller when the kept points lie too close to a line (or a point) to fit a rotation.
+
+The rules this module adds to the paper's description are documented where they are used: the histogram's mu and
+sigma (``histogram_filter``), the loops' cardinality and rounds (``invariance_check``), the support disc
+(``detect``). ``refit`` is the pipeline's addition to the paper's fit.
+
+Pixels (u, v): u right, v down, as OpenCV; points are pixel centres of the full image. Orientations are
+atan2(d_v, d_u) in degrees: 0 to the right, 90 down, growing clockwise on screen since v points down.
+"""
+
+from __future__ import annotations
+
+import numbers
+import time
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+DETECTORS = ("orb", "sift")
+
+
+SUPPORT_PER_SIZE = {"orb": 0.5, "sift": 3.0}  # the descriptor support's radius over the keypoint diameter
+
+
+DESCRIPTOR = {"orb": (32, np.uint8, cv2.NORM_HAMMING), "sift": (128, np.float32, cv2.NORM_L2)}  # width, type, norm
+
+
+SHORT_VECTOR_PX = 1.0  # a match vector shorter than this has no orientation worth binning
+
+
+LOCALISATION_PX = 0.5  # the histogram bands are never narrower than this much motion
+
+
+SHORT_SIDE_PX = 2.0  # a loop side shorter than this in both frames is too short to judge and passes
+
+
+MIN_ROI_PX = 32  # the smallest region of interest, width and height
+
+
+class FeatureError(ValueError):
+    """An image, a mask or a parameter the feature odometer cannot use."""
+
+
+def _whole(value, lowest: int) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= lowest
+
+
+def _real(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+@dataclass(frozen=True)
+class FeatureParameters:
+    """The keypoints, matching and filters of the floor feature odometer.
+
+    ``detector``: ``orb`` (fast) or ``sift`` (SURF's stand-in); ``max_features``: keypoints per frame, the strongest.
+    ``contrast_threshold``: SIFT's (OpenCV's ``contrastThreshold``; lower finds more keypoints on a smooth floor);
+    ``fast_threshold``: ORB's corner threshold, grey levels (OpenCV's ``fastThreshold``).
+    ``scale``: the image is resized by this factor before detection (OpenCV's SIFT doubles its input first, so 0.5
+    costs about a quarter); ``roi``: (u, v, width, height) of the part of the image searched, pixels (None: all),
+    the paper reached 70 Hz with one. Keypoints are always given in the full image's pixels.
+    ``ratio``: Lowe's ratio test on the two nearest neighbours (1.0: off); ``cross_check``: keep only mutual matches.
+    ``histogram_filter`` with ``orientation_bins`` (over 180 degrees) and ``length_bins``; ``invariance_check`` with
+    ``invariance_threshold`` (t), ``cardinality`` (C; None: ``choose_cardinality``) and ``rounds`` (random
+    partitions of the matches into loops). ``min_matches``: fewer matches left after the filters flag the frame.
+    ``refit_px``: for the caller (``refit``), the fit is repeated on every match the first fit moves to within this
+    many pixels of its partner (0: the paper's fit alone). ``seed``: the invariance check's random generator.
+    """
+
+    detector: str = "orb"
+    max_features: int = 500
+    contrast_threshold: float = 0.04
+    fast_threshold: int = 20
+    scale: float = 1.0
+    roi: tuple[int, int, int, int] | None = None
+    ratio: float = 0.8
+    cross_check: bool = False
+    histogram_filter: bool = True
+    orientation_bins: int = 180
+    length_bins: int = 160
+    invariance_check: bool = True
+    invariance_threshold: float = 0.85
+    cardinality: int | None = None
+    rounds: int = 3
+    min_matches: int = 6
+    refit_px: float = 1.5
+    seed: int = 0
+
+    def __post_init__(self):
+        if isinstance(self.roi, list):  # as YAML gives it
+            object.__setattr__(self, "roi", tuple(self.roi))
+        for name, (ok, expected) in self._rules().items():
+            if not ok:
+                raise FeatureError(f"{name} must be {expected}, got {getattr(self, name)!r}")
+
+    def _rules(self) -> dict[str, tuple[bool, str]]:
+        """Each field: (whether its value is allowed, what is expected)."""
+        roi = self.roi
+        roi_ok = roi is None or (
+            isinstance(roi, tuple)
+            and len(roi) == 4
+            and all(_whole(value, 0) for value in roi)
+            and min(roi[2:]) >= MIN_ROI_PX
+        )
+        flags = ("cross_check", "histogram_filter", "invariance_check")
+        return {
+            "detector": (self.detector in DETECTORS, f"one of {', '.join(map(repr, DETECTORS))}"),
+            "max_features": (_whole(self.max_features, 1), "a whole number >= 1"),
+            "contrast_threshold": (_real(self.contrast_threshold) and self.contrast_threshold > 0, "a number > 0"),
+            "fast_threshold": (_whole(self.fast_threshold, 1), "a whole number >= 1"),
+            "scale": (_real(self.scale) and 0 < self.scale <= 1, "a number in (0, 1]"),
+            "roi": (roi_ok, f"None or (u, v, width, height), whole pixels, width and height >= {MIN_ROI_PX}"),
+            "ratio": (_real(self.ratio) and 0 < self.ratio <= 1, "a number in (0, 1] (1: no ratio test)"),
+            **{name: (isinstance(getattr(self, name), bool), "True or False") for name in flags},
+            "orientation_bins": (_whole(self.orientation_bins, 1), "a whole number >= 1"),
+            "length_bins": (_whole(self.length_bins, 1), "a whole number >= 1"),
+            "invariance_threshold": (
+                _real(self.invariance_threshold) and 0 < self.invariance_threshold <= 1,
+                "a number in (0, 1]",
+            ),
+            "cardinality": (self.cardinality is None or _whole(self.cardinality, 3), "None or a whole number >= 3"),
+            "rounds": (_whole(self.rounds, 1), "a whole number >= 1"),
+            "min_matches": (_whole(self.min_matches, 2), "a whole number >= 2"),
+            "refit_px": (_real(self.refit_px) and self.refit_px >= 0, "a number >= 0 (0: no refit)"),
+            "seed": (_whole(self.seed, 0), "a whole number >= 0"),
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Keypoints:
+    """A frame's keypoints: ``points`` (N, 2) pixels of the full image, ``descriptors`` (N, D) (uint8 for ORB,
+    float32 for SIFT) and ``sizes`` (N,) keypoint diameters, pixels."""
+
+    points: np.ndarray
+    descriptors: np.ndarray
+    sizes: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+
+def detect(image: np.ndarray, parameters: FeatureParameters, mask=None) -> Keypoints:
+    """The keypoints of a grey 8-bit ``image`` (H, W) whose descriptor support lies inside the image (the region of
+    interest, if any) and off ``mask``.
+
+    ``mask`` (H, W), optional: nonzero where the image may be used. The support is the disc of radius
+    ``SUPPORT_PER_SIZE[detector] * size`` about the keypoint (ORB: size / 2, at least 15.5 px; SIFT: 3 size), in
+    the pixels it was detected in (after ``scale``). A keypoint is dropped when that disc crosses the border of
+    the image (or region of interest), or when a masked pixel lies within the radius plus half a pixel's diagonal
+    of it (the distance to the mask is read at the keypoint's rounded pixel), on the keypoint itself included.
+    """
+    image = _grey(image)
+    usable = _usable(mask, image.shape)
+    (u0, v0), image, usable = _region(image, usable, parameters.roi)
+    scale = parameters.scale
+    if scale != 1.0:
+        image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+        area = cv2.resize(usable, image.shape[::-1], interpolation=cv2.INTER_AREA)
+        usable = np.where(area == 255, 255, 0).astype(np.uint8)  # a pixel that saw any masked pixel is masked
+    found, descriptors = _detector(parameters).detectAndCompute(image, None if usable.all() else usable)
+    if not found:
+        return _no_keypoints(parameters.detector)
+    points = np.array([keypoint.pt for keypoint in found], dtype=float)
+    sizes = np.array([keypoint.size for keypoint in found], dtype=float)
+    inside = _support_clear(points, SUPPORT_PER_SIZE[parameters.detector] * sizes, usable)
+    full = (points[inside] + 0.5) / scale - 0.5 + [u0, v0]  # pixel centres of the full image
+    return Keypoints(full, descriptors[inside], sizes[inside] / scale)
+
+
+def _grey(image) -> np.ndarray:
+    if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 2 or min(image.shape) == 0:
+        described = f"{image.dtype} {image.shape}" if isinstance(image, np.ndarray) else type(image).__name__
+        raise FeatureError(f"keypoints need a grey 8-bit image (H, W), got {described}")
+    return image
+
+
+def _usable(mask, shape) -> np.ndarray:
+    """``mask`` as 255 where usable, 0 where not (uint8, all 255 when there is none)."""
+    if mask is None:
+        return np.full(shape, 255, np.uint8)
+    mask = np.asarray(mask)
+    if mask.shape != shape:
+        raise FeatureError(f"the mask is {mask.shape}, the image {shape}: they must be the same size")
+    return np.where(mask != 0, 255, 0).astype(np.uint8)
+
+
+def _region(image, usable, roi) -> tuple[tuple[int, int], np.ndarray, np.ndarray]:
+    """The region of interest's corner (u, v) and the image and mask cut to it."""
+    if roi is None:
+        return (0, 0), image, usable
+    u, v, width, height = roi
+    if u + width > image.shape[1] or v + height > image.shape[0]:
+        raise FeatureError(f"the roi {roi} reaches outside the {image.shape[1]} x {image.shape[0]} image")
+    window = np.s_[v : v + height, u : u + width]
+    return (u, v), image[window], usable[window]
+
+
+def _detector(parameters: FeatureParameters):
+    if parameters.detector == "orb":
+        return cv2.ORB_create(nfeatures=parameters.max_features, fastThreshold=parameters.fast_threshold)
+    return cv2.SIFT_create(nfeatures=parameters.max_features, contrastThreshold=parameters.contrast_threshold)
+
+
+def _no_keypoints(detector: str) -> Keypoints:
+    width, dtype, _ = DESCRIPTOR[detector]
+    return Keypoints(np.zeros((0, 2)), np.zeros((0, width), dtype), np.zeros(0))
+
+
+def _support_clear(points: np.ndarray, radius: np.ndarray, usable: np.ndarray) -> np.ndarray:
+    """True where the disc of ``radius`` about each point lies inside the image and holds no masked pixel."""
+    height, width = usable.shape
+    low, high = points - radius[:, None], points + radius[:, None]
+    inside = (low >= 0).all(axis=1) & (high <= [width - 1, height - 1]).all(axis=1)
+    if usable.all():
+        return inside
+    clearance = cv2.distanceTransform(usable, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)  # to the nearest masked pixel
+    u, v = np.clip(np.rint(points).astype(int), 0, [width - 1, height - 1]).T
+    return inside & (clearance[v, u] - np.sqrt(0.5) > radius)
+
+
+def match(previous: Keypoints, current: Keypoints, parameters: FeatureParameters) -> np.ndarray:
+    """Index pairs (M, 2), (previous index, current index), of the matches that pass the ratio test (and, with
+    ``cross_check``, whose current keypoint's own best match is the previous one). Empty when either set is; the
+    ratio test needs a second neighbour, so a single current keypoint matches only with the test off."""
+    if len(previous) == 0 or len(current) == 0:
+        return np.zeros((0, 2), dtype=int)
+    matcher = cv2.BFMatcher(DESCRIPTOR[parameters.detector][2])
+    neighbours = matcher.knnMatch(previous.descriptors, current.descriptors, k=2)
+    pairs = [(n[0].queryIdx, n[0].trainIdx) for n in neighbours if _distinct(n, parameters.ratio)]
+    pairs = np.array(pairs, dtype=int).reshape(-1, 2)
+    if parameters.cross_check and len(pairs):
+        best_previous = np.full(len(current), -1)
+        for reverse in matcher.match(current.descriptors, previous.descriptors):
+            best_previous[reverse.queryIdx] = reverse.trainIdx
+        pairs = pairs[best_previous[pairs[:, 1]] == pairs[:, 0]]
+    return pairs
+
+
+def _distinct(neighbours, ratio: float) -> bool:
+    """Lowe's ratio test on a descriptor's nearest ``neighbours`` (best first)."""
+    if ratio == 1.0:
+        return len(neighbours) > 0
+    return len(neighbours) == 2 and neighbours[0].distance < ratio * neighbours[1].distance
+
+
+@dataclass(frozen=True, eq=False)
+class HistogramStage:
+    """One histogram of the filter, for plotting: the ``values`` per match (degrees for the orientation, unwrapped to
+    lie within 180 degrees of the histogram's centre; pixels for the length), the histogram (``counts``, ``edges``,
+    as ``np.histogram``), its ``mean`` mu and ``sigma`` (NaN for an empty histogram) and which matches it ``kept``."""
+
+    values: np.ndarray
+    counts: np.ndarray
+    edges: np.ndarray
+    mean: float
+    sigma: float
+    kept: np.ndarray
+
+
+def histogram_filter(
+    start, end, orientation_bins: int = 180, length_bins: int = 160
+) -> tuple[np.ndarray, HistogramStage, HistogramStage | None]:
+    """The paper's histogram filter on the match vectors d = ``end`` - ``start`` ((N, 2) each, pixels).
+
+    Returns the mask of kept matches (N,), the orientation stage and the length stage (None when the first kept
+    nothing). The rules:
+
+    - mu and sigma are those of the histogram: the mean and standard deviation of the bin centres weighted by the
+      counts, i.e. of the binned values (each value counts as its bin's centre, at most half a bin away).
+    - Orientation is the full angle atan2(d_v, d_u), and angles wrap: the histogram is centred on the vectors'
+      circular mean and covers 180 degrees about it in ``orientation_bins`` bins (one degree each by default), so
+      vectors about +-180 degrees do not split, and motion in any direction is handled alike. A vector more than
+      90 degrees from the circular mean points against the motion: it lies outside the histogram and is dropped.
+    - A vector shorter than ``SHORT_VECTOR_PX`` has no orientation worth binning (half a pixel of error turns it
+      by up to 30 degrees): it stays out of the orientation histogram and passes that stage; the length stage
+      judges it. So a still frame (every vector about 0) passes, and keeps its matches.
+    - The lengths kept by the first stage are binned in ``length_bins`` bins from the least to the greatest (or
+      to ``LOCALISATION_PX`` above the least, if they lie closer together).
+    - Each band is mu +- sigma, but never narrower than ``LOCALISATION_PX`` of motion: +-0.5 px in length and the
+      angle 0.5 px makes at the vectors' median length in orientation. Vectors that differ by less than the
+      keypoints' localisation are not told apart; in particular all equal vectors (sigma = 0) are all kept.
+    """
+    vectors = np.asarray(end, dtype=float) - np.asarray(start, dtype=float)
+    lengths = np.hypot(vectors[:, 0], vectors[:, 1])
+    orientation = _orientation_stage(vectors, lengths, orientation_bins)
+    if not orientation.kept.any():
+        return orientation.kept, orientation, None
+    length = _length_stage(lengths, orientation.kept, length_bins)
+    return length.kept, orientation, length
+
+
+def _orientation_stage(vectors: np.ndarray, lengths: np.ndarray, bins: int) -> HistogramStage:
+    angles = np.degrees(np.arctan2(vectors[:, 1], vectors[:, 0]))
+    judged = lengths >= SHORT_VECTOR_PX
+    centre = _circular_mean_deg(angles[judged])
+    values = centre + (angles - centre + 180.0) % 360.0 - 180.0  # within 180 degrees of the centre
+    counts, edges = np.histogram(values[judged], bins=bins, range=(centre - 90.0, centre + 90.0))
+    mean, sigma = _binned_moments(counts, edges)
+    floor = np.degrees(np.arctan2(LOCALISATION_PX, np.median(lengths[judged]))) if judged.any() else 0.0
+    within = (np.abs(values - mean) <= max(sigma, floor)) & (np.abs(values - centre) <= 90.0)
+    return HistogramStage(values, counts, edges, mean, sigma, ~judged | within)
+
+
+def _length_stage(lengths: np.ndarray, among: np.ndarray, bins: int) -> HistogramStage:
+    low, high = lengths[among].min(), lengths[among].max()
+    counts, edges = np.histogram(lengths[among], bins=bins, range=(low, max(high, low + LOCALISATION_PX)))
+    mean, sigma = _binned_moments(counts, edges)
+    kept = among & (np.abs(lengths - mean) <= max(sigma, LOCALISATION_PX))
+    return HistogramStage(lengths, counts, edges, mean, sigma, kept)
+
+
+def _circular_mean_deg(angles_deg: np.ndarray) -> float:
+    """The direction of the mean unit vector of ``angles_deg``, degrees (0 for none)."""
+    return float(np.degrees(np.angle(np.exp(1j * np.radians(angles_deg)).sum())))
+
+
+def _binned_moments(counts: np.ndarray, edges: np.ndarray) -> tuple[float, float]:
+    """The mean and standard deviation of a histogram: its bin centres weighted by their counts."""
+    total = counts.sum()
+    if total == 0:
+        return float("nan"), float("nan")
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    mean = float(centres @ counts / total)
+    return mean, float(np.sqrt((centres - mean) ** 2 @ counts / total))
+
+
+@dataclass(frozen=True, eq=False)
+class InvarianceCheck:
+    """Algorithm 1's work, for plotting: the ``loops`` tried (each (C,) match indices in loop order), which were
+    ``kept_loops``, the matches ``kept`` (in at least one kept loop) and the ``cardinality`` C."""
+
+    loops: list[np.ndarray]
+    kept_loops: np.ndarray
+    kept: np.ndarray
+    cardinality: int
+
+
+def choose_cardinality(matches: int) -> int:
+    """C for ``matches`` matches: 3 below 12, 4 below 40, else 5. A longer loop is a stricter test (each of its C
+    sides must keep its length), but a right match is kept only when all C - 1 others in its loop are right too,
+    which takes many matches and few wrong ones."""
+    return 3 if matches < 12 else 4 if matches < 40 else 5
+
+
+def invariance_check(
+    start, end, threshold: float = 0.85, cardinality: int | None = None, rounds: int = 3, rng=None
+) -> InvarianceCheck:
+    """The paper's Algorithm 1 on matched points ``start`` and ``end`` ((N, 2) each, pixels).
+
+    Each of the ``rounds`` shuffles the matches (``rng``, a ``np.random.Generator``; None: seed 0) and cuts them into
+    consecutive loops of C = ``cardinality`` (None: ``choose_cardinality``); the last, short loop is filled up with
+    other matches drawn at random, so that every match is tested once a round. A loop p_1 -> ... -> p_C -> p_1 is
+    kept when each side, of length l in the start frame and l^ in the end frame, has
+    min(l, l^) / max(l, l^) >= ``threshold``; a side shorter than ``SHORT_SIDE_PX`` in both frames is too short to
+    judge (a pixel of error is half of it) and passes. A match is kept when it lies in at least one kept loop.
+    With a share w of right matches, a right one is missed in all rounds with probability (1 - w^(C-1))^rounds:
+    0.7 % for w = 0.95, C = 5 and the default 3 rounds. Fewer matches than C: none is kept.
+    """
+    start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    count = len(start)
+    size = cardinality if cardinality is not None else choose_cardinality(count)
+    rng = rng if rng is not None else np.random.default_rng(0)
+    if count < size:
+        return InvarianceCheck([], np.zeros(0, bool), np.zeros(count, bool), size)
+    loops = np.concatenate([_partition(count, size, rng) for _ in range(rounds)])
+    kept_loops = _sides_kept(start, loops, threshold, end).all(axis=1)
+    kept = np.zeros(count, bool)
+    kept[loops[kept_loops].ravel()] = True
+    return InvarianceCheck(list(loops), kept_loops, kept, size)
+
+
+def _partition(count: int, size: int, rng: np.random.Generator) -> np.ndarray:
+    """One round's loops (count / size rounded up, size): a random order of the matches cut into consecutive groups,
+    the last one filled up with matches drawn from the other groups."""
+    order = rng.permutation(count)
+    missing = -count % size
+    if missing:
+        last_start = count - (size - missing)
+        order = np.concatenate([order, rng.choice(order[:last_start], missing, replace=False)])
+    return order.reshape(-1, size)
+
+
+def _sides_kept(start: np.ndarray, loops: np.ndarray, threshold: float, end: np.ndarray) -> np.ndarray:
+    """Whether each side (loops, C) of each loop keeps its length from ``start`` to ``end``."""
+    following = np.roll(loops, -1, axis=1)
+    before, after = (np.linalg.norm(points[following] - points[loops], axis=2) for points in (start, end))
+    shorter, longer = np.minimum(before, after), np.maximum(before, after)
+    ratio = np.divide(shorter, longer, out=np.ones_like(longer), where=longer > 0)
+    return (ratio >= threshold) | (longer < SHORT_SIDE_PX)
+
+
+@dataclass(frozen=True, eq=False)
+class FeatureMatches:
+    """One frame pair, everything the chapter draws: both frames' ``previous`` and ``current`` keypoints, the
+    matches ``pairs`` (M, 2) after the ratio test and cross check, the stages' work (``histogram``: the orientation
+    and length stages; ``invariance``; None when off or not reached), the matches ``kept`` (M,) by every stage that
+    ran, the ``flag`` (None when measured, else why not) and the wall time in ``seconds`` of each stage that ran
+    ("detect": the current frame's keypoints, "match", "histogram", "invariance")."""
+
+    previous: Keypoints
+    current: Keypoints
+    pairs: np.ndarray
+    histogram: tuple[HistogramStage, HistogramStage | None] | None
+    invariance: InvarianceCheck | None
+    kept: np.ndarray
+    flag: str | None
+    seconds: dict
+
+    @property
+    def histogram_kept(self) -> np.ndarray:
+        """Which matches (M,) the histogram filter kept (all when it did not run): the invariance check's input, in
+        whose order ``invariance.loops`` count."""
+        if self.histogram is None:
+            return np.ones(len(self.pairs), bool)
+        orientation, length = self.histogram
+        return (length if length is not None else orientation).kept
+
+    @property
+    def start(self) -> np.ndarray:
+        """The kept matches' points in the previous frame (K, 2), pixels."""
+        return self.previous.points[self.pairs[self.kept, 0]]
+
+    @property
+    def end(self) -> np.ndarray:
+        """The kept matches' points in the current frame (K, 2), pixels."""
+        return self.current.points[self.pairs[self.kept, 1]]
+
+    @property
+    def matched(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every match's points (M, 2) in the previous and the current frame, pixels, kept or not."""
+        return self.previous.points[self.pairs[:, 0]], self.current.points[self.pairs[:, 1]]
+
+
+class FeatureTracker:
+    """Matches each frame's keypoints with the previous frame's. ``track(image, mask)`` returns the pair's
+    ``FeatureMatches`` (None for the first frame); each image is detected once, its keypoints serving as the next
+    frame's previous ones. ``follow(keypoints)`` does the same with keypoints already detected, so that settings
+    of the matching and the filters can be compared on one detection. ``restart()`` forgets the previous frame. The
+    invariance check draws from one generator, ``np.random.default_rng(parameters.seed)``, made here: the same
+    frames give the same matches."""
+
+    def __init__(self, parameters: FeatureParameters | None = None):
+        self.parameters = parameters if parameters is not None else FeatureParameters()
+        self._rng = np.random.default_rng(self.parameters.seed)
+        self._previous: Keypoints | None = None
+
+    def restart(self) -> None:
+        """Forget the previous frame: the next ``track`` call starts afresh."""
+        self._previous = None
+
+    def track(self, image: np.ndarray, mask=None) -> FeatureMatches | None:
+        """The matches from the previous frame to ``image`` (H, W) uint8, ``mask`` as for ``detect``."""
+        seconds = {}
+        current = _timed(seconds, "detect", detect, image, self.parameters, mask)
+        return self.follow(current, seconds)
+
+    def follow(self, current: Keypoints, seconds: dict | None = None) -> FeatureMatches | None:
+        """The matches from the previous frame's keypoints to ``current`` (None for the first frame)."""
+        previous, self._previous = self._previous, current
+        return None if previous is None else self.matches(previous, current, seconds)
+
+    def matches(self, previous: Keypoints, current: Keypoints, seconds: dict | None = None) -> FeatureMatches:
+        """Match two frames' keypoints and filter the matches with the stages the parameters switch on, stopping
+        at the first that leaves too few."""
+        p, seconds = self.parameters, dict(seconds or {})
+        pairs = _timed(seconds, "match", match, previous, current, p)
+        start, end = previous.points[pairs[:, 0]], current.points[pairs[:, 1]]
+        kept, histogram, invariance = np.ones(len(pairs), bool), None, None
+        flag = _too_few_to_filter(len(previous), len(current), len(pairs), p.min_matches)
+        if flag is None and p.histogram_filter:
+            bins = (p.orientation_bins, p.length_bins)
+            kept, *stages = _timed(seconds, "histogram", histogram_filter, start, end, *bins)
+            histogram = tuple(stages)
+            flag = _too_few_left(int(kept.sum()), "histogram filter", p.min_matches)
+        if flag is None and p.invariance_check:
+            chosen = np.flatnonzero(kept)
+            check = (start[chosen], end[chosen], p.invariance_threshold, p.cardinality, p.rounds, self._rng)
+            invariance = _timed(seconds, "invariance", invariance_check, *check)
+            kept = np.zeros(len(pairs), bool)
+            kept[chosen[invariance.kept]] = True
+            flag = _too_few_left(int(kept.sum()), "invariance check", p.min_matches)
+        return FeatureMatches(previous, current, pairs, histogram, invariance, kept, flag, seconds)
+
+
+def _timed(seconds: dict, stage: str, function, *arguments):
+    """``function(*arguments)``, its wall time added to ``seconds[stage]``."""
+    started = time.perf_counter()
+    result = function(*arguments)
+    seconds[stage] = time.perf_counter() - started
+    return result
+
+
+def _too_few_to_filter(previous: int, current: int, pairs: int, min_matches: int) -> str | None:
+    if min(previous, current) < min_matches:
+        return f"too few keypoints: {previous} and {current} (at least {min_matches} in each frame)"
+    if pairs < min_matches:
+        return f"too few matches: {pairs} of {previous} and {current} keypoints (at least {min_matches})"
+    return None
+
+
+def _too_few_left(kept: int, stage: str, min_matches: int) -> str | None:
+    if kept == 0:
+        return f"all matches rejected by the {stage}"
+    if kept < min_matches:
+        return f"too few matches left by the {stage}: {kept} (at least {min_matches})"
+    return None

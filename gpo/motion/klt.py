@@ -1,0 +1,365 @@
+"""How the floor image moves from frame to frame: Shi-Tomasi corners, pyramidal Lucas-Kanade, the median vector.
+
+Chapter 05. ``FloorFlow`` keeps a set of tracked corners on the floor image (the ortho-GPI, a metric top view,
+``gpo.floor_image``) and re-detects them (``cv2.goodFeaturesToTrack``) when too few are left. For each new frame it
+tracks them with pyramidal Lucas-Kanade (``cv2.calcOpticalFlowPyrLK``), each search starting where the previous
+frame's median motion predicts, so that the pyramid has to find only the change of motion, not the motion. Then
+it tracks the results back to the previous frame from the same prediction and keeps the tracks that return to
+where they started (the forward-backward check). Once the motion is known (the previous frame was measured), the
+backward search runs on the full-resolution image only: a right track is then a few pixels from its start.
+The kept tracks' vectors give the frame's **median** motion vector, robust to the outliers that moving objects
+and highlights make, and the mean, for the first paper's comparison (its Table 3).
+
+Each frame gets a ``FlowQuality``; a frame that cannot be measured is flagged with the reason, never turned into
+a wrong vector: no texture (no local contrast beyond the sensor's noise, ``floor_texture``), too few corners, too
+few tracks kept (a bad frame, motion blur), vectors that disagree (no consensus), or a change of motion near the
+pyramid's reach (too fast).
+
+A frame may hold a second, slower layer of vectors (``FlowQuality.slower``): on a glossy floor the reflection of
+the ceiling's lights lies as deep below the floor as the lights are above it, so as the camera (at height h)
+drives, the reflection of lights at height H moves through the floor image at h / (h + H) of the floor's speed,
+a few hundredths. On a screed whose own grain is fainter than those reflections they are much of the texture
+the corners find; they pull the median short and no check above fails. The frame is not flagged for them (the
+median is still the best estimate at hand); the run's summary counts such frames
+(``pipeline.OdometryResult.summary``). ``floor_layer`` tells the floor's own tracks from the reflections' by the
+geometry of the two layers, for the estimators that want the floor alone (``gpo-exact``).
+
+Each floor image is first flat-fielded and scaled to a common mean and contrast (exposure flicker and vignetting
+break Lucas-Kanade's constant brightness). Pixels (u, v): u right, v down, as OpenCV.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from gpo.motion.layers import slower_count, slower_layer
+
+MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
+
+
+GREY_MEAN, GREY_SPREAD = 128.0, 40.0  # every floor image is scaled to this mean and standard deviation
+
+
+CONTRAST_BOX_PX = 41  # the local mean for the texture measure when there is no flat field
+
+
+TEXTURE_LAG_PX = 3  # the texture measure compares the floor image with itself this far away (see floor_texture)
+
+
+STATISTICS_STEP = 2  # image statistics are taken over every second row and column
+
+
+class FlowError(ValueError):
+    """A floor image the tracker cannot use (wrong type, wrong size)."""
+
+
+@dataclass(frozen=True)
+class KLTParameters:
+    """Corner detection and Lucas-Kanade tracking on a floor image.
+
+    ``max_corners``, ``quality_level`` and ``min_distance_px``, ``block_size``: ``cv2.goodFeaturesToTrack``.
+    ``window_px`` (odd) and ``pyramid_levels``: ``cv2.calcOpticalFlowPyrLK``'s window and pyramid; the pyramid
+    reaches a motion of about ``window_px / 2 * 2**pyramid_levels`` pixels. ``max_iterations`` and ``epsilon_px``:
+    its stopping rule. ``forward_backward_px``: a track is kept when tracking it back ends this close to where it
+    started. ``redetect_below``: fewer tracks than this left, corners are detected afresh. ``min_tracks`` and
+    ``min_kept_ratio``: fewer kept than this many, or than this share of the tracks followed, the frame is flagged.
+    ``inlier_px``: a vector is an inlier when it lies this close to the median, or within three robust sigmas of
+    it if they are wider; fewer than ``min_inlier_ratio`` of the kept vectors inliers flags the frame (no
+    consensus). Two groups of tracks of about equal size (the floor and something moving by itself) widen the
+    spread until every vector counts: the median then lies between them and nothing flags it.
+    ``min_texture_grey``: a floor image whose local contrast beyond the sensor's noise (``floor_texture``, grey
+    levels) is lower holds nothing to track, and the frame is flagged.
+    ``flat_field_px``: each image is divided by its mean over boxes this wide before tracking, which removes slow
+    brightness gradients (0: not). ``normalise_brightness``: False tracks the images as they come (no flat field,
+    no common mean and contrast), to see what the normalisation is for.
+    """
+
+    max_corners: int = 150
+    quality_level: float = 0.01
+    min_distance_px: float = 8.0
+    block_size: int = 7
+    window_px: int = 21
+    pyramid_levels: int = 3
+    max_iterations: int = 20
+    epsilon_px: float = 0.03
+    forward_backward_px: float = 0.5
+    redetect_below: int = 60
+    min_tracks: int = 12
+    min_kept_ratio: float = 0.3
+    inlier_px: float = 1.0
+    min_inlier_ratio: float = 0.5
+    min_texture_grey: float = 1.5
+    flat_field_px: int = 41
+    normalise_brightness: bool = True
+
+    def __post_init__(self):
+        checks = {
+            "max_corners": self.max_corners >= 1,
+            "quality_level": 0 < self.quality_level < 1,
+            "min_distance_px": self.min_distance_px >= 0,
+            "block_size": self.block_size >= 3,
+            "window_px": self.window_px >= 5 and self.window_px % 2 == 1,
+            "pyramid_levels": 0 <= self.pyramid_levels <= 8,
+            "max_iterations": self.max_iterations >= 1,
+            "epsilon_px": self.epsilon_px > 0,
+            "forward_backward_px": self.forward_backward_px > 0,
+            "redetect_below": self.redetect_below >= 0,
+            "min_tracks": self.min_tracks >= 2,
+            "min_kept_ratio": 0 <= self.min_kept_ratio <= 1,
+            "min_texture_grey": self.min_texture_grey >= 0,
+            "inlier_px": self.inlier_px > 0,
+            "min_inlier_ratio": 0 <= self.min_inlier_ratio <= 1,
+            "flat_field_px": self.flat_field_px == 0 or self.flat_field_px >= 3,
+        }
+        bad = [name for name, ok in checks.items() if not ok]
+        if bad:
+            values = ", ".join(f"{name}={getattr(self, name)!r}" for name in bad)
+            raise ValueError(f"bad KLT parameters: {values} (see KLTParameters for the allowed ranges)")
+
+    @property
+    def reach_px(self) -> float:
+        """The largest motion the pyramid can follow, about half a window at the coarsest level, pixels."""
+        return self.window_px / 2 * 2**self.pyramid_levels
+
+
+@dataclass(frozen=True)
+class FlowQuality:
+    """How well a frame's motion was measured.
+
+    ``tracked``: tracks followed from the previous frame; ``kept``: those passing the forward-backward check;
+    ``inliers``: kept vectors near the median; ``spread_px``: their robust standard deviation (1.4826 MAD),
+    pixels; ``flag``: None when the frame is measured, else why it is not; ``slower``: kept vectors moving along
+    the median at under ``SLOWER_SPEED`` of its length, once it is ``SLOWER_MIN_PX`` long (a slower layer, such
+    as reflections; see the module).
+    """
+
+    tracked: int
+    kept: int
+    inliers: int
+    spread_px: float
+    flag: str | None = None
+    slower: int = 0
+
+    @property
+    def ok(self) -> bool:
+        return self.flag is None
+
+    @property
+    def inlier_ratio(self) -> float:
+        return self.inliers / self.kept if self.kept else 0.0
+
+    @property
+    def slower_layer(self) -> bool:
+        """Whether at least ``SLOWER_LAYER_SHARE`` of the kept vectors move in a slower layer."""
+        return slower_layer(self.slower, self.kept)
+
+
+@dataclass(frozen=True, eq=False)
+class FlowMeasurement:
+    """One frame's floor motion: kept tracks from ``start`` (N, 2) to ``end`` (N, 2) pixels, their ``median`` and
+    ``mean`` vectors (2,) pixels (NaN when flagged), the ``inlier`` mask (N,) and the ``quality``."""
+
+    start: np.ndarray
+    end: np.ndarray
+    median: np.ndarray
+    mean: np.ndarray
+    inlier: np.ndarray
+    quality: FlowQuality
+
+    @property
+    def vectors(self) -> np.ndarray:
+        """The kept tracks' motion vectors (N, 2), pixels."""
+        return self.end - self.start
+
+
+@dataclass
+class FloorFlow:
+    """Frame-to-frame KLT tracking on a stream of floor images of one size.
+
+    ``mask`` (H, W) bool or uint8, optional: where corners may be detected (the floor image's valid pixels);
+    it is shrunk by half a window so that no corner's window leaves it. Call ``track(image)`` once per
+    frame in order; the first frame only starts the tracks and returns None. ``restart()`` drops them (after a
+    gap, or a flagged frame that broke the chain).
+    """
+
+    parameters: KLTParameters = field(default_factory=KLTParameters)
+    mask: np.ndarray | None = None
+    _image: np.ndarray | None = field(default=None, init=False, repr=False)
+    _texture: float = field(default=0.0, init=False, repr=False)
+    _velocity: np.ndarray = field(default_factory=lambda: np.zeros(2, np.float32), init=False, repr=False)
+    _predicted: bool = field(default=False, init=False, repr=False)
+    _time_s: float = field(default=0.0, init=False, repr=False)
+    _points: np.ndarray | None = field(default=None, init=False, repr=False)
+    _detect_mask: np.ndarray | None = field(default=None, init=False, repr=False)
+    _valid: np.ndarray | None = field(default=None, init=False, repr=False)
+    _size: tuple[int, int] | None = field(default=None, init=False, repr=False)
+
+    def restart(self) -> None:
+        """Forget the previous frame: the next ``track`` call starts afresh."""
+        self._image, self._points = None, None
+        self._velocity, self._predicted = np.zeros(2, np.float32), False
+
+    def track(self, image: np.ndarray, time_s: float | None = None) -> FlowMeasurement | None:
+        """The motion from the previous frame to ``image`` (H, W) uint8; None for the first frame.
+
+        ``time_s``: the frame's time in seconds, so that the predicted motion scales with the time since the
+        previous frame (a dropped frame doubles it); None counts frames instead.
+        """
+        self._check(image)
+        image, texture = self._normalised(image)
+        previous, points, previous_texture = self._image, self._points, self._texture
+        elapsed = 1.0 if time_s is None or previous is None else time_s - self._time_s
+        self._image, self._texture, self._time_s = image, texture, 0.0 if time_s is None else time_s
+        if previous is None:
+            self._points = self._detect(image)
+            return None
+        if min(texture, previous_texture) < self.parameters.min_texture_grey:
+            self._points, self._predicted = np.zeros((0, 2), np.float32), False
+            flag = f"no texture: local contrast {min(texture, previous_texture):.1f} grey levels"
+            return _flagged(self._points, self._points, 0, flag)
+        if len(points) < self.parameters.redetect_below:
+            points = self._detect(previous)
+        prediction = (self._velocity * elapsed).astype(np.float32)
+        measurement, surviving = self._measure(previous, image, points, prediction)
+        self._points = surviving
+        self._predicted = measurement.quality.ok
+        if measurement.quality.ok:
+            self._velocity = (measurement.median / elapsed).astype(np.float32)
+        return measurement
+
+    def _measure(self, previous, image, points, prediction) -> tuple[FlowMeasurement, np.ndarray]:
+        p = self.parameters
+        nothing = np.zeros((0, 2), np.float32)
+        if len(points) < p.min_tracks:
+            flag = f"too few corners ({len(points)} < {p.min_tracks}): no texture to track"
+            return _flagged(nothing, nothing, len(points), flag), points
+        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, p.max_iterations, p.epsilon_px)
+        window = (p.window_px, p.window_px)
+        start = points.reshape(-1, 1, 2)
+        lk = {"winSize": window, "maxLevel": p.pyramid_levels, "criteria": criteria}
+        lk["flags"] = cv2.OPTFLOW_USE_INITIAL_FLOW
+        end, status, _ = cv2.calcOpticalFlowPyrLK(previous, image, start, start + prediction, **lk)
+        if self._predicted:
+            lk["maxLevel"] = 0
+        back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, previous, end, end - prediction, **lk)
+        start, end, back = start.reshape(-1, 2), end.reshape(-1, 2), back.reshape(-1, 2)
+        keep = (status.ravel() == 1) & (back_status.ravel() == 1)
+        keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2
+        keep &= self._inside(end)
+        start, end = start[keep], end[keep]
+        if len(start) < max(p.min_tracks, p.min_kept_ratio * len(points)):
+            flag = f"too few tracks kept ({len(start)} of {len(points)}): a bad or blurred frame"
+            return _flagged(start, end, len(points), flag), end
+        vectors = end - start
+        median = np.median(vectors, axis=0)
+        distance = np.hypot(*(vectors - median).T)
+        spread = MAD_TO_SIGMA * float(np.median(distance))
+        inlier = distance <= max(p.inlier_px, 3.0 * spread)
+        quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=slower_count(vectors, median))
+        flag = None
+        if quality.inlier_ratio < p.min_inlier_ratio:
+            flag = f"no consensus: {quality.inliers} of {quality.kept} vectors near the median"
+        elif np.hypot(*(median - prediction)) > 0.8 * p.reach_px:
+            change = np.hypot(*(median - prediction))
+            flag = f"too fast: the motion changed by {change:.0f} px, near the pyramid's reach {p.reach_px:.0f} px"
+        if flag:
+            return _flagged(start, end, len(points), flag, inlier, spread), end
+        measurement = FlowMeasurement(start, end, median, vectors.mean(axis=0), inlier, quality)
+        return measurement, end
+
+    def _check(self, image: np.ndarray) -> None:
+        if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 2:
+            raise FlowError(f"a floor image is a 2-D uint8 array, got {getattr(image, 'dtype', type(image))}")
+        size = image.shape[::-1]
+        if self._size is None:
+            self._size = size
+            self._valid = None if self.mask is None or self.mask.all() else self.mask.astype(np.uint8)
+            self._detect_mask = self._shrunk_mask(image.shape)
+        elif size != self._size:
+            raise FlowError(f"floor image size changed from {self._size} to {size} (width, height)")
+
+    def _normalised(self, image: np.ndarray) -> tuple[np.ndarray, float]:
+        """``image`` divided by its local mean (a flat field) and scaled to one mean and contrast over the mask, and
+        its local contrast beyond noise in grey levels (``floor_texture``).
+
+        Lucas-Kanade assumes constant brightness. A few per cent of exposure flicker on a low-contrast floor pulls
+        every track off, and a brightness gradient fixed to the camera (vignetting, the robot's own light) pulls
+        each track towards standing still by an amount that varies across the image: on the simulated T265 rig
+        it turned the rigid fit's rotations 1 % short, which the flat field removes.
+        """
+        size = self.parameters.flat_field_px or CONTRAST_BOX_PX
+        floor = image.astype(np.float32)
+        local_mean = cv2.blur(floor, (size, size))
+        texture = floor_texture(floor - local_mean, self._valid)
+        if not self.parameters.normalise_brightness:
+            return image, texture
+        sample = np.s_[::STATISTICS_STEP, ::STATISTICS_STEP]  # a quarter of the pixels: plenty for mean and spread
+        mask = None if self._valid is None else self._valid[sample]
+        if self.parameters.flat_field_px:
+            floor = cv2.divide(floor, local_mean)  # where the local mean is 0, so is the image: 0
+        mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(floor[sample], mask=mask))
+        gain = GREY_SPREAD / max(spread, 1e-6)
+        return cv2.convertScaleAbs(floor, alpha=gain, beta=GREY_MEAN - gain * mean), texture
+
+    def _shrunk_mask(self, shape) -> np.ndarray:
+        """Where a corner's whole window lies inside the mask and the image."""
+        inside = np.zeros(shape, np.uint8)
+        if self.mask is None:
+            inside[:] = 255
+        else:
+            if self.mask.shape != shape:
+                raise FlowError(f"mask shape {self.mask.shape} differs from the floor image's {shape}")
+            inside[self.mask.astype(bool)] = 255
+        half = self.parameters.window_px // 2 + 1
+        inside = cv2.erode(inside, np.ones((2 * half + 1, 2 * half + 1), np.uint8))  # the image's edge does not erode
+        inside[:half], inside[-half:], inside[:, :half], inside[:, -half:] = 0, 0, 0, 0
+        return inside
+
+    def _detect(self, image: np.ndarray) -> np.ndarray:
+        p = self.parameters
+        corners = cv2.goodFeaturesToTrack(
+            image, p.max_corners, p.quality_level, p.min_distance_px, mask=self._detect_mask, blockSize=p.block_size
+        )
+        return np.zeros((0, 2), np.float32) if corners is None else corners.reshape(-1, 2)
+
+    def _inside(self, points: np.ndarray) -> np.ndarray:
+        """Tracks whose end still has its window inside the image (the mask's shrunk region at the rounded pixel)."""
+        width, height = self._size
+        u, v = np.rint(points[:, 0]).astype(int), np.rint(points[:, 1]).astype(int)
+        inside = (u >= 0) & (u < width) & (v >= 0) & (v < height)
+        inside[inside] = self._detect_mask[v[inside], u[inside]] > 0
+        return inside
+
+
+def floor_texture(detail: np.ndarray, valid: np.ndarray | None = None) -> float:
+    """The floor image's local contrast beyond the sensor's noise, grey levels: the square root of how much
+    ``detail`` (the image less its local mean, float32) agrees with itself ``TEXTURE_LAG_PX`` pixels across and
+    down (its autocovariance there), over the pixels ``valid`` (uint8, nonzero) at both ends; 0 when it disagrees.
+
+    Sensor noise adds to every pixel's variance, and a standard deviation counts it as contrast: on the simulated
+    T265 a uniform grey floor reads 1.5-2.7 grey levels, a matte screed that gpo-exact follows to about 0.1 % of the
+    distance 3.3-4.9. But each pixel's noise is its own, spread by the floor image's resampling over a pixel or two,
+    so it adds next to nothing to the covariance 3 px away (0.2-0.4), while the floor's grain is wider than that
+    and adds to both (the screed 2.3-3.9). A smeared frame keeps its texture along one direction, and the forward-
+    backward check flags it.
+    """
+    lag = TEXTURE_LAG_PX
+    products, weights = 0.0, 0.0
+    for ahead, behind in ((np.s_[:, lag:], np.s_[:, :-lag]), (np.s_[lag:, :], np.s_[:-lag, :])):
+        pair = detail[ahead] * detail[behind]
+        if valid is None:
+            products, weights = products + float(pair.sum(dtype=np.float64)), weights + pair.size
+        else:
+            both = (valid[ahead] > 0) & (valid[behind] > 0)
+            products, weights = products + float(pair[both].sum(dtype=np.float64)), weights + int(both.sum())
+    return float(np.sqrt(max(products / max(weights, 1), 0.0)))
+
+
+def _flagged(start, end, tracked: int, flag: str, inlier=None, spread: float = float("nan")) -> FlowMeasurement:
+    nan = np.full(2, np.nan)
+    inlier = np.zeros(len(start), bool) if inlier is None else inlier
+    quality = FlowQuality(tracked, len(start), int(inlier.sum()), spread, flag)
+    return FlowMeasurement(start, end, nan, nan, inlier, quality)

@@ -1,0 +1,293 @@
+"""A config in, a trajectory out: the one place where the stages meet.
+
+Long (about 730 lines) because all that joins the stages is here: the config read into stages, the odometer's step
+for every method and route, the run over a bag and its result; each stage itself lives in its own module.
+
+``run(bag, config)`` streams a recording's camera frames through the floor image's one remap table
+(``gpo.floor_image``), the frame-to-frame floor flow (``gpo.motion.klt``) and a motion estimator
+(``gpo.odometry.kinematics``), and
+integrates the pose of ``base_link`` in ``odom`` (the pose at the first frame is the origin). The estimators
+(``METHODS``):
+
+- ``gpo``: the first paper's Ground Plane Odometry: the median motion vector read as the motion of a virtual
+  front wheel a wheelbase L ahead of the rear axle, through the paper's bicycle model (eqs. 25-34, Euler step).
+  The vector is the motion of the floor where the tracks are, and tracks drift towards the robot between
+  re-detections, so the wheel is placed at the tracks' median each frame (about L; l_r keeps its ratio to L).
+  Left at the fixed L, every turn read 5 % short on the ``long1`` path;
+- ``gpo-exact``: the same vector, of the floor's own tracks (on a glossy floor not its reflections':
+  ``gpo.motion.layers.floor_layer``), turned into the exact circular arc of a rigid robot that does not slide at its
+  rear axle (reverse driving and turning on the spot included);
+- ``gpo-rigid``: no kinematic model: the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
+  frame's increment;
+- ``fused``: one of those (``FusionSettings.floor_method``) and the tracking camera's own odometry from the same
+  bag, fused by the EKF of ``gpo.fusion``.
+
+Every frame gets a ``FrameRecord``. A frame that cannot be measured is flagged with the reason and the robot
+**coasts** across it at the last measured velocity, for at most ``max_gap_s``; beyond that it is held still.
+Frames whose stamp repeats or goes backwards are skipped; a gap longer than ``max_gap_s`` between frames is
+flagged, the pose held across it and tracking restarted after it. A frame that cannot be read (a corrupt JPEG, a
+short buffer, another size) is skipped and flagged with the reason, and the frames after it are read. ``run``
+returns what it computed when reading stops early, at Ctrl-C, or when the fusion fails (the result says which).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+from scipy.spatial.transform import Rotation
+
+from gpo.cameras.rig import Rig
+from gpo.fusion import FilterDiverged, FusionSettings, TrackingMount, fuse
+from gpo.io.bag import Recording, StampWarning
+from gpo.io.outputs import write_text, write_with
+from gpo.io.trajectory import Trajectory, base_from_sensor_odometry
+from gpo.motion.layers import slower_layer
+from gpo.pipeline.config import Method, OdometryConfig, load_config
+from gpo.pipeline.odometer import FloorOdometer, FrameRecord, Status, Unreadable
+
+
+@dataclass(frozen=True)
+class FloorRun:
+    """A floor run's path of base_link in odom (``trajectory``) at every frame not skipped, the flow's inlier tracks
+    behind each of its steps (``inliers``: 0 where the step was coasted, held or first), the run's frames per second,
+    and the inliers' spread behind each step (``spread_px``, pixels: NaN where unknown; None when not kept)."""
+
+    trajectory: Trajectory
+    inliers: np.ndarray
+    frames_per_second: float
+    spread_px: np.ndarray | None = None
+
+
+@dataclass
+class OdometryResult:
+    """A run's frames and timing: ``records`` (one per frame read), ``seconds`` of wall time, the ``config``,
+    the recording's ``source`` and ``topic``, ``error``: why the run stopped early or its fusion failed, or None,
+    and whether it was ``interrupted`` (Ctrl-C, SIGTERM) before the end."""
+
+    records: list[FrameRecord]
+    seconds: float
+    config: OdometryConfig
+    source: str
+    topic: str
+    error: str | None = None
+    fused: Trajectory | None = None
+    fusion: dict | None = None  # the fused route's own summary: the mount's source, refused and dropped measurements
+    interrupted: bool = False
+
+    @property
+    def flagged(self) -> bool:
+        """Whether the result is short of what was asked: stopped early, interrupted, or not fused."""
+        return self.error is not None or self.interrupted
+
+    @property
+    def trajectory(self) -> Trajectory:
+        """base_link in odom at every frame that was not skipped (for ``fused``, the EKF's path)."""
+        return self.fused if self.fused is not None else self.floor_trajectory
+
+    @property
+    def floor_trajectory(self) -> Trajectory:
+        """The floor odometry's own path of base_link in odom, at every frame that was not skipped."""
+        kept = [r for r in self.records if r.status is not Status.SKIPPED]
+        poses = np.array([r.pose for r in kept]).reshape(-1, 3)
+        stamps = np.array([r.stamp_ns for r in kept], dtype=np.int64)
+        return Trajectory.from_planar(stamps, poses[:, 0], poses[:, 1], poses[:, 2], frame_id="odom")
+
+    @property
+    def frames_per_second(self) -> float:
+        return len(self.records) / self.seconds if self.seconds > 0 else math.nan
+
+    @property
+    def floor_run(self) -> FloorRun:
+        """The floor odometry as the EKF reads it (``gpo.fusion.fuse``): its path, each step's inliers and spread."""
+        kept = [r for r in self.records if r.status is not Status.SKIPPED]
+        inliers = np.array([r.inliers if r.status is Status.MEASURED else 0 for r in kept])
+        spread = np.array([r.spread_px for r in kept])
+        return FloorRun(self.floor_trajectory, inliers, self.frames_per_second, spread)
+
+    def summary(self) -> dict:
+        """Plain numbers for people and files: distance, frames by status, flags by reason, speed, and (when any)
+        the frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor)."""
+        statuses = Counter(r.status for r in self.records)
+        slower = sum(slower_layer(r.slower, r.kept) for r in self.records)
+        reasons = Counter(_reason(r.flag) for r in self.records if r.flag)
+        unreadable = [f"{r.stamp_ns}: {r.flag}" for r in self.records if r.flag and r.flag.startswith("unreadable")]
+        trajectory = self.trajectory
+        return {
+            "source": self.source,
+            "topic": self.topic,
+            "method": str(self.config.method),
+            "vector": self.config.vector,
+            "frames": len(self.records),
+            **{f"frames_{status}": statuses.get(status, 0) for status in Status if status is not Status.FIRST},
+            "flags": dict(reasons.most_common()),
+            **({"frames_slower_layer": slower} if slower else {}),
+            "distance_m": round(trajectory.path_length, 4),
+            "duration_s": round(float(np.ptp(trajectory.times)), 3) if len(trajectory) else 0.0,
+            "frames_per_second": round(self.frames_per_second, 1),
+            "stopped_early": self.error,
+            **({"unreadable": unreadable} if unreadable else {}),
+            **({"interrupted": True} if self.interrupted else {}),
+            **({"fusion": self.fusion} if self.fusion is not None else {}),
+        }
+
+    def write(self, tum_path) -> tuple[Path, Path]:
+        """Write the trajectory as TUM and the summary as YAML beside it (``summary_path``), each through a
+        temporary name (``gpo.io.outputs``); return both paths."""
+        tum_path = Path(tum_path)
+        summary_path = write_text(summary_path_of(tum_path), yaml.safe_dump(self.summary(), sort_keys=False))
+        return write_with(tum_path, self.trajectory.write_tum), summary_path
+
+
+def summary_path_of(tum_path) -> Path:
+    """Where ``OdometryResult.write`` puts the summary of the TUM file ``tum_path``: ``.summary.yaml`` beside it."""
+    return Path(tum_path).with_suffix(".summary.yaml")
+
+
+def _reason(flag: str) -> str:
+    """A flag's kind, without its numbers: the text before the first colon."""
+    return flag.split(":")[0].split("(")[0].strip()
+
+
+def run(bag, config: OdometryConfig | None = None, topic: str | None = None, progress: bool = True) -> OdometryResult:
+    """Odometry of the camera frames of ``bag`` (``topic``: default the rig's image topic when the bag has it,
+    else its only image topic). The topic, and for ``fused`` the tracking camera's odometry and mount, are checked
+    before the first frame. Returns what was computed even when reading stops early, is interrupted (Ctrl-C) or
+    the fusion fails: then ``error`` or ``interrupted`` say so (nothing is raised, so that the partial result, or
+    the floor odometry alone, can be written). Unreadable frames are skipped and flagged."""
+    config = config or load_config()
+    with Recording(bag) as recording, warnings.catch_warnings():
+        warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
+        topic = _choose_topic(recording, topic, config.rig)
+        if config.method is Method.FUSED:  # the tracking camera's topic, odometry and mount, before any frame
+            _check_tracking_topic(recording, config.fusion)
+            tracking = tracking_path(recording, config.fusion)
+            _, note = tracking_mount(recording, config.fusion)
+        started = time.perf_counter()
+        frames = (
+            (frame.stamp_ns, frame.image if frame.problem is None else Unreadable(frame.problem))
+            for frame in recording.frames(topic, gray=True, progress=progress, flag_unreadable=True)
+        )
+        try:
+            result = odometry(frames, config, str(bag), topic)
+        except ValueError as error:
+            raise ValueError(f"{bag}, topic {topic}: {error}") from None
+        if config.method is Method.FUSED and not result.interrupted:
+            _fuse_into(result, tracking, config.fusion, note)
+            result.seconds = time.perf_counter() - started
+    return result
+
+
+def _fuse_into(result: OdometryResult, tracking: Trajectory, settings: FusionSettings, note: str | None) -> None:
+    """Add the EKF's path from the floor odometry of ``result`` and the tracking camera's path of base_link
+    (``tracking_path``) to ``result``; when the tracking stream cannot be fused, say why in ``result.error`` and
+    leave the floor odometry as the result."""
+    floor = result.floor_run
+    mount = "config (fusion.tracking_mount)" if note == "config" else "/tf_static"
+    result.fusion = {"mount": mount, **({"note": note} if note not in (None, "config") else {})}
+    try:
+        fused = fuse(floor.trajectory, floor.inliers, tracking, settings, floor.spread_px)
+    except (ValueError, FilterDiverged) as failure:
+        reason = f"fusion failed, the floor odometry is the result: {failure}"
+        result.error = reason if result.error is None else f"{result.error}; {reason}"
+        return
+    result.fused = fused.trajectory
+    result.fusion.update(refused_by_nis_gate=fused.refused, dropped=fused.dropped)
+
+
+def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str = "") -> OdometryResult:
+    """Floor odometry of ``frames``: (stamp_ns, image) pairs in stamp order, each image a grey camera frame or, for
+    the ``features`` method, its ``FloorOdometer.keypoints``, so that runs differing only in the matching and the
+    filters can share one detection. For ``fused`` the floor method's odometry (``run`` adds the filter). Stops at
+    the first frame that cannot be read (an error of reading ``frames``) and says why in ``error``, and at Ctrl-C
+    (KeyboardInterrupt), keeping the frames before and marking the result ``interrupted``."""
+    fused = config.method is Method.FUSED
+    odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
+    records: list[FrameRecord] = []
+    started = time.perf_counter()
+    error, interrupted = None, False
+    try:
+        for stamp_ns, image in frames:
+            records.append(odometer.step(stamp_ns, image))
+    except (ValueError, KeyError, OSError) as failure:
+        if not records:
+            raise
+        error = f"after {len(records)} frames: {failure}"
+    except KeyboardInterrupt:
+        interrupted = True
+    if records and all(r.flag and r.flag.startswith("unreadable") for r in records):
+        raise ValueError(f"none of the {len(records)} frames could be read; the first: {records[0].flag}")
+    seconds = time.perf_counter() - started
+    return OdometryResult(records, seconds, config, source, topic, error, interrupted=interrupted)
+
+
+def tracking_path(recording: Recording, settings: FusionSettings) -> Trajectory:
+    """The recording's tracking-camera odometry as the path of base_link in odom (the origin at its first pose)."""
+    try:
+        odometry = recording.trajectory(settings.tracking_topic)
+    except ValueError as error:
+        topic = settings.tracking_topic
+        raise ValueError(f"the tracking camera's odometry on {topic} cannot be read: {error}") from None
+    mount, _ = tracking_mount(recording, settings)
+    return base_from_sensor_odometry(odometry, mount, (Rotation.identity(), np.zeros(3)))
+
+
+MOUNT_TOLERANCE = (1e-3, 0.1)  # metres, degrees: a configured mount further than this from /tf_static's is reported
+
+
+def tracking_mount(recording: Recording, settings: FusionSettings) -> tuple[tuple[Rotation, np.ndarray], str | None]:
+    """The tracking camera's pose frame in base_link (rotation, translation m) and where it came from: /tf_static's
+    base_link -> ``tracking_frame`` when the bag has it (then None, or a sentence when ``fusion.tracking_mount``
+    disagrees by more than ``MOUNT_TOLERANCE``), else ``fusion.tracking_mount`` (then "config"). Neither: a
+    ValueError naming both ways."""
+    configured = settings.tracking_mount
+    try:
+        translation, quaternion = recording.static_transform("base_link", settings.tracking_frame)
+    except ValueError as missing:
+        if configured is None:
+            raise ValueError(
+                f"{missing}. The tracking camera's mount is needed one of two ways: a /tf_static transform "
+                f"base_link -> {settings.tracking_frame} in the bag, or fusion: tracking_mount: "
+                f"{{position_m: [x, y, z], rpy_deg: [roll, pitch, yaw]}} in the config (its pose frame, x forward, "
+                "y left, z up, in base_link)"
+            ) from None
+        return _configured_mount(configured), "config"
+    static = (Rotation.from_quat(quaternion), np.asarray(translation, dtype=float))
+    if configured is None:
+        return static, None
+    rotation, position = _configured_mount(configured)
+    moved = float(np.linalg.norm(position - static[1]))
+    turned = float(np.degrees((rotation.inv() * static[0]).magnitude()))
+    if moved > MOUNT_TOLERANCE[0] or turned > MOUNT_TOLERANCE[1]:
+        return static, (
+            f"fusion.tracking_mount is {1e3 * moved:.1f} mm and {turned:.2f} deg from /tf_static's base_link -> "
+            f"{settings.tracking_frame}; /tf_static's is used"
+        )
+    return static, None
+
+
+def _configured_mount(mount: TrackingMount) -> tuple[Rotation, np.ndarray]:
+    return Rotation.from_euler("xyz", mount.rpy_deg, degrees=True), np.array(mount.position_m)
+
+
+def _check_tracking_topic(recording: Recording, settings: FusionSettings) -> None:
+    topics = {t.name: t for t in recording.topics()}
+    if settings.tracking_topic not in topics:
+        raise ValueError(
+            f"{recording.path}: no topic {settings.tracking_topic} for the tracking camera's odometry "
+            f"(fusion.tracking_topic); the bag has {', '.join(sorted(topics))}"
+        )
+
+
+def _choose_topic(recording: Recording, topic: str | None, rig: Rig) -> str:
+    if topic is not None:
+        return recording.image_topic(topic)
+    if rig.image_topic in {t.name for t in recording.topics()}:
+        return recording.image_topic(rig.image_topic)
+    return recording.image_topic()
