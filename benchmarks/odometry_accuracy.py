@@ -25,13 +25,13 @@ from gpo.batch.sweep import sweep
 from gpo.io.bag import Recording
 from gpo.io.outputs import write_json
 from gpo.metrics import final_error
-from gpo.pipeline.config import METHODS, load_config
+from gpo.pipeline.config import load_config, methods
 from gpo.pipeline.run import tracking_path
 from gpo.sim.population import render
 from gpo.sim.record import GROUND_TRUTH_TOPIC, PRESETS
 
 TARGET_PERCENT = {"camera": math.inf, "gpo": 0.5, "gpo-exact": 0.3, "gpo-rigid": 0.3, "fused": 0.3}
-CHOICES = ("camera", *METHODS)
+CHOICES = ("camera", *methods())
 
 
 def camera_row(preset: str, bag: Path) -> dict:

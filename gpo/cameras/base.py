@@ -20,6 +20,7 @@ wrong length raises a ``ValueError`` that says which shape was expected.
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import numpy as np
 
@@ -69,12 +70,54 @@ def check_image_size(camera) -> None:
 
 
 class CameraModel:
-    """What every camera model shares: pixel helpers over its ``width`` x ``height`` image."""
+    """What every camera model is: a frozen dataclass of its intrinsics (the first four ``fx, fy, cx, cy``) and its
+    image's ``width`` and ``height``, which projects points of the optical frame to pixels and back.
+
+    A model implements ``project(points) -> (pixels, valid)`` and ``unproject(pixels) -> (rays, valid)`` (the module
+    docstring's shapes and validity), ``params`` and ``from_params`` (its parameter vector, named by
+    ``PARAMETER_NAMES``) and, to be fitted by least squares, ``project_jacobians`` with ``BOUNDS`` and ``START_SHAPE``.
+    The class attributes below say how calibration files name it (``gpo.cameras.files``) and how a fit starts
+    (``gpo.cameras.fit``); ``NAME`` is its name in ``gpo.cameras.MODELS``, configs and the command line.
+    """
 
     width: int
     height: int
+    fx: float
+    fy: float
     cx: float
     cy: float
+
+    NAME: ClassVar[str]
+    PARAMETER_NAMES: ClassVar[tuple[str, ...]] = ()
+    KALIBR_MODEL: ClassVar[str | None] = None  # Kalibr's camera_model (None: not written to Kalibr files)
+    KALIBR_DISTORTIONS: ClassVar[tuple[str, ...]] = ("none",)  # the distortion_model names it reads
+    KALIBR_INTRINSICS: ClassVar[int] = 0  # how many intrinsics a Kalibr entry of it lists
+    CAMERA_INFO: ClassVar[str] = ""  # the camera_info distortion models it reads, as an error message lists them
+    BASALT_TYPE: ClassVar[str | None] = None  # Basalt's camera_type (None: not in Basalt files)
+    BOUNDS: ClassVar[dict[str, tuple[float, float]] | None] = None  # least squares: shape parameters' bounds
+    START_SHAPE: ClassVar[tuple[float, ...]] = ()  # the shape parameters a fit starts from
+    START_FOCAL_SCALE: ClassVar[float] = 1.0  # a fit's start focal length over the local focal length
+
+    @classmethod
+    def from_kalibr(cls, intrinsics: list[float], distortion: str, coeffs: list[float], width: int, height: int,
+                    where: str) -> CameraModel:
+        """The camera of a Kalibr entry of this model (its ``KALIBR_MODEL``, one of its ``KALIBR_DISTORTIONS``)."""
+        raise TypeError(f"{where}: {cls.__name__} is not read from Kalibr files")
+
+    def kalibr(self, name: str) -> tuple[list[float], str, list[float]]:
+        """(intrinsics, distortion model, distortion coefficients) of its Kalibr entry; ``name`` names it in errors."""
+        raise TypeError(f"{name}: cannot write a {type(self).__name__} as a Kalibr camera")
+
+    @classmethod
+    def from_camera_info(cls, model: str, d: list[float], fx: float, fy: float, cx: float, cy: float, width: int,
+                         height: int) -> CameraModel | None:
+        """The camera of a ROS camera_info of ``distortion_model`` ``model`` and coefficients ``d``, or None when this
+        model does not read it."""
+        return None
+
+    def camera_info_distortion(self) -> tuple[str, list[float]]:
+        """The camera_info ``distortion_model`` and D of this camera."""
+        raise TypeError(f"a {type(self).__name__} has no camera_info distortion model")
 
     def in_image(self, uv) -> np.ndarray:
         """True where pixel coordinates ``uv (..., 2)`` fall inside the image.

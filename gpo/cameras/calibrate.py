@@ -99,7 +99,7 @@ from tqdm.auto import tqdm
 
 from gpo.cameras.eucm import EUCM
 from gpo.cameras.files import Camera
-from gpo.cameras.fit import MODELS as MODEL_CLASSES
+from gpo.cameras import MODELS as MODEL_CLASSES
 from gpo.cameras.fit import fit_model, parameter_bounds
 from gpo.cameras.pinhole import Pinhole
 from gpo.cameras.targets import Chessboard

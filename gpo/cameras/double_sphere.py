@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -53,6 +54,27 @@ class DoubleSphere(CameraModel):
     height: int
 
     PARAMETER_NAMES = DS_PARAMETER_NAMES
+    NAME = "ds"
+    KALIBR_MODEL, KALIBR_INTRINSICS = "ds", 6  # intrinsics [xi, alpha, fu, fv, pu, pv]
+    CAMERA_INFO = "ds (xi, alpha)"
+    BASALT_TYPE = "ds"
+    BOUNDS: ClassVar[dict[str, tuple[float, float]]] = {"xi": (-1.0, 1.0), "alpha": (0.0, 1.0)}
+    START_SHAPE = (0.0, 0.5)
+
+    @classmethod
+    def from_kalibr(cls, intrinsics, distortion, coeffs, width, height, where) -> DoubleSphere:
+        xi, alpha, fx, fy, cx, cy = intrinsics
+        return cls(fx, fy, cx, cy, xi, alpha, width, height)
+
+    def kalibr(self, name: str) -> tuple[list[float], str, list[float]]:
+        return [self.xi, self.alpha, self.fx, self.fy, self.cx, self.cy], "none", []
+
+    @classmethod
+    def from_camera_info(cls, model, d, fx, fy, cx, cy, width, height) -> DoubleSphere | None:
+        return cls(fx, fy, cx, cy, d[0], d[1], width, height) if model == "ds" and len(d) == 2 else None
+
+    def camera_info_distortion(self) -> tuple[str, list[float]]:
+        return "ds", [self.xi, self.alpha]
 
     def __post_init__(self):
         check_intrinsics(self)

@@ -7,6 +7,7 @@ Letters 1(1), 2016; written as in the first paper's eqs. 1-7 and as Basalt imple
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -51,6 +52,27 @@ class EUCM(CameraModel):
     height: int
 
     PARAMETER_NAMES = EUCM_PARAMETER_NAMES
+    NAME = "eucm"
+    KALIBR_MODEL, KALIBR_INTRINSICS = "eucm", 6  # intrinsics [alpha, beta, fu, fv, pu, pv]
+    CAMERA_INFO = "eucm (alpha, beta)"
+    BASALT_TYPE = "eucm"
+    BOUNDS: ClassVar[dict[str, tuple[float, float]]] = {"alpha": (0.0, 1.0), "beta": (1e-6, np.inf)}
+    START_SHAPE = (0.5, 1.0)  # a stereographic lens
+
+    @classmethod
+    def from_kalibr(cls, intrinsics, distortion, coeffs, width, height, where) -> EUCM:
+        alpha, beta, fx, fy, cx, cy = intrinsics
+        return cls(fx, fy, cx, cy, alpha, beta, width, height)
+
+    def kalibr(self, name: str) -> tuple[list[float], str, list[float]]:
+        return [self.alpha, self.beta, self.fx, self.fy, self.cx, self.cy], "none", []
+
+    @classmethod
+    def from_camera_info(cls, model, d, fx, fy, cx, cy, width, height) -> EUCM | None:
+        return cls(fx, fy, cx, cy, d[0], d[1], width, height) if model == "eucm" and len(d) == 2 else None
+
+    def camera_info_distortion(self) -> tuple[str, list[float]]:
+        return "eucm", [self.alpha, self.beta]
 
     def __post_init__(self):
         check_intrinsics(self)

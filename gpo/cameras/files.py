@@ -27,8 +27,8 @@ BoofCV's camera YAML (``load_boofcv``), its unified model ``omnidirectional_univ
 cx, cy, width, height, skew), ``mirror_offset`` (xi), ``radial_tangential`` (``radial`` k1, k2; t1, t2 as
 OpenCV's p1, p2), as `Omni`.
 
-Only the models of ``gpo.cameras`` are read; any other model is refused with an error that names
-it and the file.
+Every model of ``gpo.cameras.MODELS`` says how these formats name it (``CameraModel.KALIBR_MODEL`` and its
+neighbours); any other model is refused with an error that names it and the file.
 """
 
 from __future__ import annotations
@@ -40,31 +40,16 @@ from pathlib import Path
 
 import yaml
 
-from gpo.cameras.double_sphere import DoubleSphere
-from gpo.cameras.eucm import EUCM
-from gpo.cameras.kb4 import KB4
+from gpo.cameras import MODELS, CameraModel
 from gpo.cameras.omni import Omni
-from gpo.cameras.pinhole import Pinhole
 
-Camera = EUCM | Pinhole | Omni | KB4 | DoubleSphere
-
-#: Basalt's camera_type -> model, for the models both know
-_BASALT_MODELS = {"eucm": EUCM, "ds": DoubleSphere, "kb4": KB4}
+Camera = CameraModel  # any model of ``gpo.cameras.MODELS``
 
 
 def _field(entry: Mapping, key: str, where: str):
     if key not in entry:
         raise ValueError(f"{where}: missing the field '{key}'")
     return entry[key]
-
-
-def _radtan_coeffs(distortion: str, coeffs: list[float], where: str) -> tuple[float, ...]:
-    """(k1, k2, p1, p2) of a 'radtan' entry, zeros for 'none'; ``where`` names the entry in error messages."""
-    if distortion == "none":
-        return (0.0, 0.0, 0.0, 0.0)
-    if len(coeffs) != 4:
-        raise ValueError(f"{where}: radtan needs 4 distortion_coeffs [k1, k2, r1, r2], got {len(coeffs)}")
-    return tuple(coeffs)
 
 
 def load_kalibr(path) -> dict[str, Camera]:
@@ -77,52 +62,34 @@ def load_kalibr(path) -> dict[str, Camera]:
 
 
 def camera_from_kalibr(entry: Mapping, where: str) -> Camera:
-    """The camera of one Kalibr camchain entry (a mapping); ``where`` names it in error messages."""
+    """The camera of one Kalibr camchain entry (a mapping); ``where`` names it in error messages. The model is the one
+    of ``MODELS`` whose ``KALIBR_MODEL``, ``KALIBR_DISTORTIONS`` and ``KALIBR_INTRINSICS`` the entry has."""
     model = _field(entry, "camera_model", where)
     intrinsics = [float(v) for v in _field(entry, "intrinsics", where)]
     width, height = _field(entry, "resolution", where)
     distortion = entry.get("distortion_model", "none")
     coeffs = [float(v) for v in entry.get("distortion_coeffs", []) or []]
-    if model == "eucm" and distortion == "none" and len(intrinsics) == 6:
-        alpha, beta, fx, fy, cx, cy = intrinsics
-        return EUCM(fx, fy, cx, cy, alpha, beta, width, height)
-    if model == "ds" and distortion == "none" and len(intrinsics) == 6:
-        xi, alpha, fx, fy, cx, cy = intrinsics
-        return DoubleSphere(fx, fy, cx, cy, xi, alpha, width, height)
-    if model == "pinhole" and distortion == "equidistant" and len(intrinsics) == 4:
-        if len(coeffs) != 4:
-            raise ValueError(f"{where}: equidistant needs 4 distortion_coeffs [k1, k2, k3, k4], got {len(coeffs)}")
-        return KB4(*intrinsics, *coeffs, width, height)
-    if model == "pinhole" and distortion in ("radtan", "none") and len(intrinsics) == 4:
-        return Pinhole(*intrinsics, _radtan_coeffs(distortion, coeffs, where), width, height)
-    if model == "omni" and distortion in ("radtan", "none") and len(intrinsics) == 5:
-        xi, fu, fv, pu, pv = intrinsics
-        return Omni(fu, fv, pu, pv, xi, _radtan_coeffs(distortion, coeffs, where), width, height)
+    for cls in MODELS.values():
+        form = (cls.KALIBR_MODEL, cls.KALIBR_INTRINSICS)
+        if form == (model, len(intrinsics)) and distortion in cls.KALIBR_DISTORTIONS:
+            return cls.from_kalibr(intrinsics, distortion, coeffs, width, height, where)
+    forms = ", ".join(
+        f"'{cls.KALIBR_MODEL}' ({cls.KALIBR_INTRINSICS} intrinsics, distortion "
+        f"{' or '.join(map(repr, cls.KALIBR_DISTORTIONS))})"
+        for cls in MODELS.values()
+        if cls.KALIBR_MODEL is not None
+    )
     raise ValueError(
         f"{where}: unsupported camera model '{model}' with distortion '{distortion}' and "
-        f"{len(intrinsics)} intrinsics; supported are 'eucm' and 'ds' (6 intrinsics, distortion 'none'), "
-        "'pinhole' (4 intrinsics, distortion 'radtan', 'equidistant' or 'none') and 'omni' (5 intrinsics, "
-        "distortion 'radtan' or 'none')"
+        f"{len(intrinsics)} intrinsics; supported are {forms}"
     )
 
 
 def camera_to_kalibr(camera: Camera, name: str) -> dict:
     """One Kalibr camchain entry (without ``rostopic``) for ``camera``; ``name`` names it in error messages."""
-    pinhole = [camera.fx, camera.fy, camera.cx, camera.cy]
-    if isinstance(camera, EUCM):
-        return _kalibr_entry(camera, "eucm", [camera.alpha, camera.beta, *pinhole], "none", [])
-    if isinstance(camera, DoubleSphere):
-        return _kalibr_entry(camera, "ds", [camera.xi, camera.alpha, *pinhole], "none", [])
-    if isinstance(camera, KB4):
-        return _kalibr_entry(camera, "pinhole", pinhole, "equidistant", list(camera.dist))
-    if isinstance(camera, Pinhole):
-        k1, k2, p1, p2, *rest = camera.dist
-        if rest and rest[0] != 0.0:
-            raise ValueError(f"{name}: Kalibr's radtan has no k3, but this camera has k3 = {rest[0]}")
-        return _kalibr_entry(camera, "pinhole", pinhole, "radtan", [k1, k2, p1, p2])
-    if isinstance(camera, Omni):
-        return _kalibr_entry(camera, "omni", [camera.xi, *pinhole], "radtan", list(camera.dist))
-    raise TypeError(f"{name}: cannot write a {type(camera).__name__} as a Kalibr camera")
+    if camera.KALIBR_MODEL is None:
+        raise TypeError(f"{name}: cannot write a {type(camera).__name__} as a Kalibr camera")
+    return _kalibr_entry(camera, camera.KALIBR_MODEL, *camera.kalibr(name))
 
 
 def _kalibr_entry(camera: Camera, model: str, intrinsics: list, distortion: str, coeffs: list) -> dict:
@@ -148,7 +115,12 @@ def save_kalibr(path, cameras: Mapping[str, Camera], rostopics: Mapping[str, str
     return path
 
 
-def load_basalt(path) -> list[EUCM | DoubleSphere | KB4]:
+def _basalt_models() -> dict[str, type[CameraModel]]:
+    """The models Basalt files hold, by their ``camera_type``."""
+    return {cls.BASALT_TYPE: cls for cls in MODELS.values() if cls.BASALT_TYPE is not None}
+
+
+def load_basalt(path) -> list[Camera]:
     """Cameras of a Basalt calibration JSON, in the file's order."""
     path = Path(path)
     try:
@@ -164,18 +136,18 @@ def load_basalt(path) -> list[EUCM | DoubleSphere | KB4]:
     for index, (entry, (width, height)) in enumerate(zip(entries, sizes, strict=True)):
         where = f"{path}, camera {index}"
         model = _field(entry, "camera_type", where)
-        if model not in _BASALT_MODELS:
-            raise ValueError(
-                f"{where}: unsupported camera model '{model}'; supported are {', '.join(map(repr, _BASALT_MODELS))}"
-            )
-        cls = _BASALT_MODELS[model]
+        basalt = _basalt_models()
+        if model not in basalt:
+            supported = ", ".join(map(repr, basalt))
+            raise ValueError(f"{where}: unsupported camera model '{model}'; supported are {supported}")
+        cls = basalt[model]
         values = _field(entry, "intrinsics", where)
         params = [float(_field(values, name, where)) for name in cls.PARAMETER_NAMES]
         cameras.append(cls.from_params(params, width, height))
     return cameras
 
 
-def save_basalt(path, cameras: Sequence[EUCM | DoubleSphere | KB4], template: Mapping | None = None) -> Path:
+def save_basalt(path, cameras: Sequence[Camera], template: Mapping | None = None) -> Path:
     """Write ``cameras`` as a Basalt calibration JSON.
 
     Only the cameras' intrinsics and resolutions are written. Pass a loaded Basalt document as
@@ -186,14 +158,11 @@ def save_basalt(path, cameras: Sequence[EUCM | DoubleSphere | KB4], template: Ma
     calibration = document.setdefault("value0", {})
     intrinsics = []
     for index, camera in enumerate(cameras):
-        names = [name for name, cls in _BASALT_MODELS.items() if type(camera) is cls]
-        if not names:
-            raise TypeError(
-                f"camera {index}: Basalt files are written for EUCM, DoubleSphere and KB4 cameras, "
-                f"got {type(camera).__name__}"
-            )
+        if camera.BASALT_TYPE is None:
+            known = ", ".join(cls.__name__ for cls in _basalt_models().values())
+            raise TypeError(f"camera {index}: Basalt files hold {known} cameras, not a {type(camera).__name__}")
         values = dict(zip(camera.PARAMETER_NAMES, camera.params.tolist(), strict=True))
-        intrinsics.append({"camera_type": names[0], "intrinsics": values})
+        intrinsics.append({"camera_type": camera.BASALT_TYPE, "intrinsics": values})
     calibration["intrinsics"] = intrinsics
     calibration["resolution"] = [[camera.width, camera.height] for camera in cameras]
     path = Path(path)
@@ -203,39 +172,24 @@ def save_basalt(path, cameras: Sequence[EUCM | DoubleSphere | KB4], template: Ma
 
 def camera_from_camera_info(model: str, d, k, width: int, height: int, where: str) -> Camera:
     """The camera of a ROS camera_info's ``distortion_model``, D, K (9 values, row major) and image size;
-    ``where`` names the message in error messages."""
+    ``where`` names the message in error messages. The model is the first of ``MODELS`` that reads it."""
     if k[1] != 0.0:
         raise ValueError(f"{where}: the camera matrix K has a skew of {k[1]}; the camera models have none")
     fx, fy, cx, cy = (float(k[i]) for i in (0, 4, 2, 5))
     d = [float(v) for v in d]
-    if model == "eucm" and len(d) == 2:
-        return EUCM(fx, fy, cx, cy, d[0], d[1], width, height)
-    if model == "ds" and len(d) == 2:
-        return DoubleSphere(fx, fy, cx, cy, d[0], d[1], width, height)
-    if model == "equidistant" and (len(d) == 4 or (len(d) == 5 and d[4] == 0.0)):
-        return KB4(fx, fy, cx, cy, *d[:4], width, height)
-    if model == "rational_polynomial" and len(d) == 8 and not any(d[5:]):
-        d = d[:5]
-    if model in ("plumb_bob", "rational_polynomial") and len(d) in (0, 4, 5):
-        return Pinhole(fx, fy, cx, cy, d or (0.0,) * 5, width, height)
+    for cls in MODELS.values():
+        camera = cls.from_camera_info(model, d, fx, fy, cx, cy, width, height)
+        if camera is not None:
+            return camera
+    expected = ", ".join(cls.CAMERA_INFO for cls in MODELS.values() if cls.CAMERA_INFO)
     raise ValueError(
-        f"{where}: distortion model {model!r} with {len(d)} coefficients is not supported; expected "
-        "plumb_bob (k1, k2, p1, p2[, k3]), rational_polynomial with k4 = k5 = k6 = 0, equidistant "
-        "(k1, k2, k3, k4), eucm (alpha, beta) or ds (xi, alpha)"
+        f"{where}: distortion model {model!r} with {len(d)} coefficients is not supported; expected one of {expected}"
     )
 
 
 def camera_info_distortion(camera: Camera) -> tuple[str, list[float]]:
     """The camera_info ``distortion_model`` and D of ``camera`` (see the module docstring)."""
-    if isinstance(camera, EUCM):
-        return "eucm", [camera.alpha, camera.beta]
-    if isinstance(camera, DoubleSphere):
-        return "ds", [camera.xi, camera.alpha]
-    if isinstance(camera, KB4):
-        return "equidistant", list(camera.dist)
-    if isinstance(camera, Pinhole):
-        return "plumb_bob", list(camera.dist)
-    raise TypeError(f"a {type(camera).__name__} has no camera_info distortion model")
+    return camera.camera_info_distortion()
 
 
 def load_boofcv(path) -> Omni:

@@ -11,8 +11,8 @@ Pixels where the source has no ray are left out; a ray the target cannot project
 ``INVALID_RESIDUAL_PX`` in each coordinate, so the fit is pushed to cover the whole image. The result
 says how well the target holds the source: the RMS (per coordinate) and the worst pixel distance.
 
-Models are named as on the command line (``MODELS``): eucm, ds, kb4, omni and pinhole. A pinhole
-cannot be a fit's target (it has no analytic Jacobian here and cannot hold a fisheye's field of view).
+Models are named as on the command line (``gpo.cameras.MODELS``). A model is a fit's target when it has ``BOUNDS``
+and ``project_jacobians`` (``fittable``): not the pinhole, which cannot hold a fisheye's field of view.
 Units: pixels; frames as in `gpo.cameras`.
 """
 
@@ -23,23 +23,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from gpo.cameras.double_sphere import DoubleSphere
-from gpo.cameras.eucm import EUCM
-from gpo.cameras.kb4 import KB4
-from gpo.cameras.omni import Omni
-from gpo.cameras.pinhole import Pinhole
+from gpo.cameras import MODELS
 
-MODELS = {"eucm": EUCM, "ds": DoubleSphere, "kb4": KB4, "omni": Omni, "pinhole": Pinhole}
-"""Camera model classes by the name the command line and the config use."""
-
-FITTABLE = ("eucm", "ds", "kb4", "omni")
 INVALID_RESIDUAL_PX = 100.0
-_BOUNDS = {  # parameter -> (lower, upper) beyond fx, fy >= 1 px
-    "eucm": {"alpha": (0.0, 1.0), "beta": (1e-6, np.inf)},
-    "ds": {"xi": (-1.0, 1.0), "alpha": (0.0, 1.0)},
-    "kb4": {},
-    "omni": {"xi": (0.0, np.inf)},
-}
+
+
+def fittable() -> tuple[str, ...]:
+    """The models a least-squares fit can target: those with ``BOUNDS`` (and so ``project_jacobians``)."""
+    return tuple(name for name, cls in MODELS.items() if cls.BOUNDS is not None)
 
 
 def model_name(camera) -> str:
@@ -51,30 +42,31 @@ def model_name(camera) -> str:
 
 
 def _check_fittable(model: str) -> type:
-    if model not in FITTABLE:
-        raise ValueError(f"cannot fit the camera model '{model}'; choose one of {', '.join(FITTABLE)}")
+    if model not in fittable():
+        raise ValueError(f"cannot fit the camera model '{model}'; choose one of {', '.join(fittable())}")
     return MODELS[model]
 
 
 def parameter_bounds(model: str) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper bounds of ``model``'s parameter vector (its ``PARAMETER_NAMES``), for least squares."""
+    """Lower and upper bounds of ``model``'s parameter vector (its ``PARAMETER_NAMES``), for least squares: fx, fy at
+    least 1 px, the shape parameters within the model's ``BOUNDS``."""
     cls = _check_fittable(model)
     names = cls.PARAMETER_NAMES
     lower, upper = np.full(len(names), -np.inf), np.full(len(names), np.inf)
     lower[:2] = 1.0  # fx, fy
-    for name, (low, high) in _BOUNDS[model].items():
+    for name, (low, high) in cls.BOUNDS.items():
         lower[names.index(name)], upper[names.index(name)] = low, high
     return lower, upper
 
 
 def initial_camera(model: str, focal: float, cx: float, cy: float, width: int, height: int):
     """A start for ``model`` that images a small field around the axis with the focal length ``focal``
-    (pixels per radian there): EUCM alpha = 0.5, beta = 1; DS xi = 0, alpha = 0.5; KB4 equidistant (k = 0);
-    omni xi = 1 without distortion (whose focal length is twice the local one)."""
+    (pixels per radian there): the model's ``START_SHAPE`` (EUCM alpha = 0.5, beta = 1; DS xi = 0, alpha = 0.5; KB4
+    equidistant, k = 0; omni xi = 1 without distortion, whose focal length is twice the local one:
+    ``START_FOCAL_SCALE``)."""
     cls = _check_fittable(model)
-    shape = {"eucm": (0.5, 1.0), "ds": (0.0, 0.5), "kb4": (0.0,) * 4, "omni": (1.0, 0.0, 0.0, 0.0, 0.0)}[model]
-    scale = 2.0 if model == "omni" else 1.0
-    return cls.from_params([scale * focal, scale * focal, cx, cy, *shape], width, height)
+    scale = cls.START_FOCAL_SCALE
+    return cls.from_params([scale * focal, scale * focal, cx, cy, *cls.START_SHAPE], width, height)
 
 
 def local_focal(camera) -> float:

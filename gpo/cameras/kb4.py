@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -49,6 +50,30 @@ class KB4(CameraModel):
     height: int
 
     PARAMETER_NAMES = KB4_PARAMETER_NAMES
+    NAME = "kb4"
+    KALIBR_MODEL, KALIBR_DISTORTIONS, KALIBR_INTRINSICS = "pinhole", ("equidistant",), 4  # + coeffs [k1, k2, k3, k4]
+    CAMERA_INFO = "equidistant (k1, k2, k3, k4)"
+    BASALT_TYPE = "kb4"
+    BOUNDS: ClassVar[dict[str, tuple[float, float]]] = {}
+    START_SHAPE = (0.0,) * 4  # equidistant
+
+    @classmethod
+    def from_kalibr(cls, intrinsics, distortion, coeffs, width, height, where) -> KB4:
+        if len(coeffs) != 4:
+            raise ValueError(f"{where}: equidistant needs 4 distortion_coeffs [k1, k2, k3, k4], got {len(coeffs)}")
+        return cls(*intrinsics, *coeffs, width, height)
+
+    def kalibr(self, name: str) -> tuple[list[float], str, list[float]]:
+        return [self.fx, self.fy, self.cx, self.cy], "equidistant", list(self.dist)
+
+    @classmethod
+    def from_camera_info(cls, model, d, fx, fy, cx, cy, width, height) -> KB4 | None:
+        if model == "equidistant" and (len(d) == 4 or (len(d) == 5 and d[4] == 0.0)):
+            return cls(fx, fy, cx, cy, *d[:4], width, height)
+        return None
+
+    def camera_info_distortion(self) -> tuple[str, list[float]]:
+        return "equidistant", list(self.dist)
 
     def __post_init__(self):
         check_intrinsics(self)

@@ -7,11 +7,12 @@ radial-tangential distortion (k1, k2, p1, p2) as Kalibr's ``omni`` + ``radtan`` 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from gpo.cameras.base import CameraModel, check_intrinsics, finite, round_trip_valid, shaped
-from gpo.cameras.pinhole import RadialTangential, check_radtan
+from gpo.cameras.pinhole import RadialTangential, check_radtan, radtan_coeffs
 
 OMNI_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "xi", "k1", "k2", "p1", "p2")
 
@@ -73,6 +74,19 @@ class Omni(RadialTangential, CameraModel):
         object.__setattr__(self, "dist", check_radtan(self.dist, (4,)))
 
     PARAMETER_NAMES = OMNI_PARAMETER_NAMES
+    NAME = "omni"
+    KALIBR_MODEL, KALIBR_DISTORTIONS, KALIBR_INTRINSICS = "omni", ("radtan", "none"), 5  # [xi, fu, fv, pu, pv]
+    BOUNDS: ClassVar[dict[str, tuple[float, float]]] = {"xi": (0.0, np.inf)}
+    START_SHAPE = (1.0, 0.0, 0.0, 0.0, 0.0)  # xi = 1 without distortion
+    START_FOCAL_SCALE = 2.0  # whose focal length is twice the local one
+
+    @classmethod
+    def from_kalibr(cls, intrinsics, distortion, coeffs, width, height, where) -> Omni:
+        xi, fu, fv, pu, pv = intrinsics
+        return cls(fu, fv, pu, pv, xi, radtan_coeffs(distortion, coeffs, where), width, height)
+
+    def kalibr(self, name: str) -> tuple[list[float], str, list[float]]:
+        return [self.xi, self.fx, self.fy, self.cx, self.cy], "radtan", list(self.dist)
 
     @classmethod
     def from_params(cls, params, width: int, height: int) -> Omni:

@@ -27,6 +27,15 @@ def check_radtan(dist, lengths: tuple[int, ...]) -> tuple[float, ...]:
     return dist
 
 
+def radtan_coeffs(distortion: str, coeffs: list[float], where: str) -> tuple[float, ...]:
+    """(k1, k2, p1, p2) of a Kalibr entry's ``radtan`` distortion, zeros for ``none``; ``where`` names the entry."""
+    if distortion == "none":
+        return (0.0, 0.0, 0.0, 0.0)
+    if len(coeffs) != 4:
+        raise ValueError(f"{where}: radtan needs 4 distortion_coeffs [k1, k2, r1, r2], got {len(coeffs)}")
+    return tuple(coeffs)
+
+
 class RadialTangential:
     """OpenCV's radial-tangential distortion on the normalised image plane, shared by `Pinhole` and `Omni`.
 
@@ -121,6 +130,31 @@ class Pinhole(RadialTangential, CameraModel):
         check_intrinsics(self)
         dist = check_radtan(self.dist, (4, 5))
         object.__setattr__(self, "dist", (*dist, 0.0)[:5])  # always (k1, k2, p1, p2, k3)
+
+    NAME = "pinhole"
+    KALIBR_MODEL, KALIBR_DISTORTIONS, KALIBR_INTRINSICS = "pinhole", ("radtan", "none"), 4  # + [k1, k2, r1, r2]
+    CAMERA_INFO = "plumb_bob (k1, k2, p1, p2[, k3]), rational_polynomial with k4 = k5 = k6 = 0"
+
+    @classmethod
+    def from_kalibr(cls, intrinsics, distortion, coeffs, width, height, where) -> Pinhole:
+        return cls(*intrinsics, radtan_coeffs(distortion, coeffs, where), width, height)
+
+    def kalibr(self, name: str) -> tuple[list[float], str, list[float]]:
+        k1, k2, p1, p2, *rest = self.dist
+        if rest and rest[0] != 0.0:
+            raise ValueError(f"{name}: Kalibr's radtan has no k3, but this camera has k3 = {rest[0]}")
+        return [self.fx, self.fy, self.cx, self.cy], "radtan", [k1, k2, p1, p2]
+
+    @classmethod
+    def from_camera_info(cls, model, d, fx, fy, cx, cy, width, height) -> Pinhole | None:
+        if model == "rational_polynomial" and len(d) == 8 and not any(d[5:]):
+            d = d[:5]
+        if model in ("plumb_bob", "rational_polynomial") and len(d) in (0, 4, 5):
+            return cls(fx, fy, cx, cy, d or (0.0,) * 5, width, height)
+        return None
+
+    def camera_info_distortion(self) -> tuple[str, list[float]]:
+        return "plumb_bob", list(self.dist)
 
     @property
     def camera_matrix(self) -> np.ndarray:

@@ -9,7 +9,7 @@ from pathlib import Path
 from gpo.cli.common import INTERRUPTED
 from gpo.io.bag import copy_with_trajectory
 from gpo.io.outputs import check_output, destination, write_with
-from gpo.pipeline.config import METHODS, VECTORS, load_config
+from gpo.pipeline.config import VECTORS, load_config, methods
 from gpo.pipeline.propose import config_from_bag
 from gpo.pipeline.run import OdometryResult, summary_path_of
 from gpo.pipeline.run import run as run_odometry
@@ -22,7 +22,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("bag", type=Path, help="a ROS1 .bag, a ROS2 bag folder, or a .db3/.mcap file")
     parser.add_argument("--config", type=Path, help="run config YAML (default: from what the bag holds)")
     parser.add_argument("--out", type=Path, default=Path("traj.tum"), help="TUM file to write (default traj.tum)")
-    parser.add_argument("--method", choices=METHODS, help="motion estimator (default: the config's)")
+    parser.add_argument("--method", choices=methods(), help="motion estimator (default: the config's)")
     parser.add_argument("--vector", choices=VECTORS, help="motion vector statistic (default: the config's)")
     parser.add_argument("--topic", help="image topic (default: the config's, else the bag's only one)")
     parser.add_argument("--write-bag", type=Path, help="a copy of the bag with the estimate on /gpo/odom")

@@ -36,6 +36,7 @@ atan2(d_v, d_u) in degrees: 0 to the right, 90 down, growing clockwise on screen
 
 from __future__ import annotations
 
+import math
 import numbers
 import time
 from dataclasses import dataclass
@@ -432,6 +433,13 @@ class FeatureMatches:
     kept: np.ndarray
     flag: str | None
     seconds: dict
+
+    @property
+    def counts(self) -> tuple[int, int, int, float, int]:
+        """(matches, kept, kept, NaN, 0): a frame's record's counts (tracked, kept, inliers, spread in pixels, slower
+        vectors), as for a KLT flow (``gpo.motion.klt.FlowMeasurement.counts``)."""
+        kept = int(self.kept.sum())
+        return len(self.pairs), kept, kept, math.nan, 0
 
     @property
     def histogram_kept(self) -> np.ndarray:

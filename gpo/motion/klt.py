@@ -174,6 +174,17 @@ class FlowMeasurement:
         """The kept tracks' motion vectors (N, 2), pixels."""
         return self.end - self.start
 
+    @property
+    def flag(self) -> str | None:
+        """Why the frame's motion could not be measured (``quality.flag``), or None."""
+        return self.quality.flag
+
+    @property
+    def counts(self) -> tuple[int, int, int, float, int]:
+        """(tracked, kept, inliers, spread in pixels, vectors in a slower layer), as a frame's record holds them."""
+        quality = self.quality
+        return quality.tracked, quality.kept, quality.inliers, quality.spread_px, quality.slower
+
 
 @dataclass
 class FloorFlow:

@@ -22,20 +22,9 @@ from gpo.fusion import FusionSettings
 from gpo.io.outputs import write_text
 from gpo.motion.keypoints import FeatureParameters
 from gpo.motion.klt import KLTParameters
-from gpo.odometry.kinematics import (
-    PaperBicycle,
-)
+from gpo.odometry.estimators import ESTIMATORS, FloorEstimator
+from gpo.odometry.kinematics import PaperBicycle
 from gpo.pipeline.schema import FloorImageSection, read_config, rig_from_config, rig_to_dict
-
-
-class Method(StrEnum):
-    """The motion estimators (the module docstring says what each does); each is its name in configs."""
-
-    GPO = "gpo"
-    GPO_EXACT = "gpo-exact"
-    GPO_RIGID = "gpo-rigid"
-    FEATURES = "features"
-    FUSED = "fused"
 
 
 class Route(StrEnum):
@@ -47,25 +36,28 @@ class Route(StrEnum):
     KEYPOINTS = "keypoints"
 
 
-METHODS = tuple(Method)
-
-
-FLOOR_METHODS = tuple(method for method in Method if method is not Method.FUSED)
-
-
+FUSED = "fused"
+"""The method that fuses a floor estimator's odometry with the tracking camera's (``gpo.fusion``)."""
 ROUTES = tuple(Route)
-
-
 VECTORS = ("median", "mean")
-
-
 DEFAULT_CONFIG = "sim_t265.yaml"
+
+
+def floor_methods() -> tuple[str, ...]:
+    """The floor motion estimators' names (``gpo.odometry.estimators.ESTIMATORS``), in the registry's order."""
+    return tuple(ESTIMATORS)
+
+
+def methods() -> tuple[str, ...]:
+    """Every ``odometry.method`` a config may name: the floor estimators and ``fused``."""
+    return (*floor_methods(), FUSED)
 
 
 @dataclass(frozen=True, eq=False)
 class OdometryConfig:
     """Everything a run needs: the ``rig``, the ``floor`` image, the KLT ``klt`` parameters, the paper's bicycle
-    ``model``, the ``method`` (one of ``METHODS``), the ``vector`` statistic (median or mean; for ``gpo`` and
+    ``model``, the ``method`` (one of ``methods()``: a floor estimator of ``gpo.odometry.estimators`` or ``fused``), the
+    ``vector`` statistic (median or mean; for ``gpo`` and
     ``gpo-exact``), ``max_gap_s``, the longest time the robot coasts or a frame gap is bridged, seconds, the
     ``fusion`` settings of the ``fused`` method, and the ``route`` that makes the floor image (``floor_table``):
 
@@ -83,7 +75,7 @@ class OdometryConfig:
     floor: FloorImage
     klt: KLTParameters = field(default_factory=KLTParameters)
     model: PaperBicycle | None = None
-    method: Method = Method.GPO_EXACT
+    method: str = "gpo-exact"
     vector: str = "median"
     max_gap_s: float = 0.5
     fusion: FusionSettings = field(default_factory=FusionSettings)
@@ -95,20 +87,18 @@ class OdometryConfig:
     def __post_init__(self):
         if self.route not in ROUTES:
             raise ValueError(f"unknown route {self.route!r}; the routes are {', '.join(ROUTES)}")
-        if self.method not in METHODS:
-            raise ValueError(f"unknown method {self.method!r}; the methods are {', '.join(METHODS)}")
+        if self.method not in methods():
+            raise ValueError(f"unknown method {self.method!r}; the methods are {', '.join(methods())}")
         object.__setattr__(self, "route", Route(self.route))  # a name from a file or the command line, as a member
-        object.__setattr__(self, "method", Method(self.method))
+        object.__setattr__(self, "method", str(self.method))
         if self.route in (Route.ORTHO_GPI, Route.GPI) and (self.board_image is None or self.board is None):
             raise ValueError(f"the {self.route} route needs board_image (a frame of the floor board) and board")
-        if self.fusion.floor_method not in FLOOR_METHODS:
+        if self.fusion.floor_method not in floor_methods():
             floor_method = self.fusion.floor_method
-            raise ValueError(f"fusion.floor_method must be one of {', '.join(FLOOR_METHODS)}, got {floor_method!r}")
-        floor_method = self.fusion.floor_method if self.method is Method.FUSED else self.method
-        if self.route is Route.KEYPOINTS and floor_method != Method.FEATURES:
-            raise ValueError(
-                f"the keypoints route corrects keypoints: it needs the features method, not {floor_method}"
-            )
+            raise ValueError(f"fusion.floor_method must be one of {', '.join(floor_methods())}, got {floor_method!r}")
+        if self.route is Route.KEYPOINTS and self.estimator.MOTION != "keypoints":
+            method = self.floor_method
+            raise ValueError(f"the keypoints route corrects keypoints: it needs a method that reads them, not {method}")
         if self.vector not in VECTORS:
             raise ValueError(f"unknown vector {self.vector!r}; use {' or '.join(VECTORS)}")
         if not self.max_gap_s > 0:
@@ -116,6 +106,16 @@ class OdometryConfig:
         if self.model is None:
             centre = float(np.mean(self.floor.extent[:2]))
             object.__setattr__(self, "model", PaperBicycle(centre, centre))
+
+    @property
+    def floor_method(self) -> str:
+        """The floor estimator's name: the method, or for ``fused`` the one it fuses (``fusion.floor_method``)."""
+        return self.fusion.floor_method if self.method == FUSED else self.method
+
+    @property
+    def estimator(self) -> type[FloorEstimator]:
+        """The floor estimator's class (``gpo.odometry.estimators.ESTIMATORS``)."""
+        return ESTIMATORS[self.floor_method]
 
     def replace(self, **changes) -> OdometryConfig:
         """A copy with ``changes`` (any field, e.g. method="gpo")."""

@@ -1,26 +1,10 @@
-"""A config in, a trajectory out: the one place where the stages meet.
+"""A recording in, a trajectory out: ``run(bag, config)``.
 
-Long (about 730 lines) because all that joins the stages is here: the config read into stages, the odometer's step
-for every method and route, the run over a bag and its result; each stage itself lives in its own module.
-
-``run(bag, config)`` streams a recording's camera frames through the floor image's one remap table
-(``gpo.floor_image``), the frame-to-frame floor flow (``gpo.motion.klt``) and a motion estimator
-(``gpo.odometry.kinematics``), and
-integrates the pose of ``base_link`` in ``odom`` (the pose at the first frame is the origin). The estimators
-(``METHODS``):
-
-- ``gpo``: the first paper's Ground Plane Odometry: the median motion vector read as the motion of a virtual
-  front wheel a wheelbase L ahead of the rear axle, through the paper's bicycle model (eqs. 25-34, Euler step).
-  The vector is the motion of the floor where the tracks are, and tracks drift towards the robot between
-  re-detections, so the wheel is placed at the tracks' median each frame (about L; l_r keeps its ratio to L).
-  Left at the fixed L, every turn read 5 % short on the ``long1`` path;
-- ``gpo-exact``: the same vector, of the floor's own tracks (on a glossy floor not its reflections':
-  ``gpo.motion.layers.floor_layer``), turned into the exact circular arc of a rigid robot that does not slide at its
-  rear axle (reverse driving and turning on the spot included);
-- ``gpo-rigid``: no kinematic model: the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
-  frame's increment;
-- ``fused``: one of those (``FusionSettings.floor_method``) and the tracking camera's own odometry from the same
-  bag, fused by the EKF of ``gpo.fusion``.
+``run`` streams a recording's camera frames through the config's ``FloorOdometer`` (``gpo.pipeline.odometer``: the
+floor image's one remap table, the floor's motion, the config's floor estimator of ``gpo.odometry.estimators``) and
+integrates the pose of ``base_link`` in ``odom`` (the pose at the first frame is the origin). With the method
+``fused``, the floor odometry of ``fusion.floor_method`` and the tracking camera's own odometry from the same bag are
+fused by the EKF of ``gpo.fusion``.
 
 Every frame gets a ``FrameRecord``. A frame that cannot be measured is flagged with the reason and the robot
 **coasts** across it at the last measured velocity, for at most ``max_gap_s``; beyond that it is held still.
@@ -49,7 +33,7 @@ from gpo.io.bag import Recording, StampWarning
 from gpo.io.outputs import write_text, write_with
 from gpo.io.trajectory import Trajectory, base_from_sensor_odometry
 from gpo.motion.layers import slower_layer
-from gpo.pipeline.config import Method, OdometryConfig, load_config
+from gpo.pipeline.config import FUSED, OdometryConfig, load_config
 from gpo.pipeline.odometer import FloorOdometer, FrameRecord, Status, Unreadable
 
 
@@ -165,7 +149,7 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
     with Recording(bag) as recording, warnings.catch_warnings():
         warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
         topic = _choose_topic(recording, topic, config.rig)
-        if config.method is Method.FUSED:  # the tracking camera's topic, odometry and mount, before any frame
+        if config.method == FUSED:  # the tracking camera's topic, odometry and mount, before any frame
             _check_tracking_topic(recording, config.fusion)
             tracking = tracking_path(recording, config.fusion)
             _, note = tracking_mount(recording, config.fusion)
@@ -178,7 +162,7 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
             result = odometry(frames, config, str(bag), topic)
         except ValueError as error:
             raise ValueError(f"{bag}, topic {topic}: {error}") from None
-        if config.method is Method.FUSED and not result.interrupted:
+        if config.method == FUSED and not result.interrupted:
             _fuse_into(result, tracking, config.fusion, note)
             result.seconds = time.perf_counter() - started
     return result
@@ -207,7 +191,7 @@ def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str 
     filters can share one detection. For ``fused`` the floor method's odometry (``run`` adds the filter). Stops at
     the first frame that cannot be read (an error of reading ``frames``) and says why in ``error``, and at Ctrl-C
     (KeyboardInterrupt), keeping the frames before and marking the result ``interrupted``."""
-    fused = config.method is Method.FUSED
+    fused = config.method == FUSED
     odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
     records: list[FrameRecord] = []
     started = time.perf_counter()

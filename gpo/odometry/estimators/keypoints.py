@@ -1,11 +1,12 @@
-"""The second paper's rigid fit of the kept keypoint matches, and the fit's aids.
-"""
+"""``features``: the second paper's rigid 2-D transform (theta, Tx, Ty, its eqs. 3-4) of the kept keypoint matches in
+metres as the robot's increment, fitted again on every match it explains (``refit``, the suite's addition)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from gpo.motion.keypoints import FeatureError
+from gpo.odometry.estimators.base import FloorEstimator
 from gpo.odometry.kinematics import increment_from_point_pairs, seen_after
 
 REFIT_ROUNDS = 5  # at most this many fits in ``refit``
@@ -42,3 +43,22 @@ def refit(start, end, increment, tolerance: float, min_matches: int) -> np.ndarr
             break
         increment, explained = increment_from_point_pairs(start[close], end[close]), close
     return increment
+
+
+class RigidKeypoints(FloorEstimator):
+    """The rigid transform of the kept matches, on the floor, refitted on every match it explains to ``refit_px``."""
+
+    NAME = "features"
+    MOTION = "keypoints"
+
+    def increment(self, matches, dt: float) -> tuple[np.ndarray | None, str | None]:
+        parameters = self.config.features
+        start, end, on_floor = self.geometry.on_floor(*matches.matched)  # every match once, kept or not
+        kept = matches.kept & on_floor
+        if kept.sum() < parameters.min_matches or degenerate(matches.start):
+            return None, f"degenerate: {kept.sum()} kept matches on the floor, (nearly) on one line"
+        increment = increment_from_point_pairs(start[kept], end[kept])
+        if parameters.refit_px > 0:
+            tolerance = parameters.refit_px * self.geometry.pixel_m
+            increment = refit(start[on_floor], end[on_floor], increment, tolerance, parameters.min_matches)
+        return increment, None

@@ -1,0 +1,111 @@
+"""A floor motion estimator: the plug-in behind each ``odometry.method`` of a run config.
+
+An estimator turns one frame's measured floor motion into the robot's increment over the frame: (dx, dy, dtheta),
+base_link at the frame's end in base_link at its start, metres and radians (REP-103: x forward, y left, z up;
+dtheta positive counter-clockwise). It reads one kind of measurement (``MOTION``): ``tracks``, the floor image's
+KLT flow (``gpo.motion.klt.FlowMeasurement``), or ``keypoints``, matched keypoints
+(``gpo.motion.keypoints.FeatureMatches``); where those pixels lie on the floor is its ``FloorGeometry``.
+
+A new estimator is one module of ``gpo.odometry.estimators`` holding a subclass of `FloorEstimator`, and one line in
+``gpo.odometry.estimators.ESTIMATORS``, which the config's schema, the command line's ``--method``, the sweeps and the
+documentation read.
+"""
+
+from __future__ import annotations
+
+import functools
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+
+from gpo.cameras import CameraModel
+from gpo.cameras.rig import CameraMount
+from gpo.floor_image.analytic import pixels_to_floor
+from gpo.floor_image.image import FloorImage
+
+if TYPE_CHECKING:
+    from gpo.pipeline.config import OdometryConfig
+
+
+@dataclass(frozen=True, eq=False)
+class FloorGeometry:
+    """Where the pixels an estimator reads lie on the floor, in base_link (metres).
+
+    For a floor image (``floor``): its affine map (``FloorImage.affine``); ``nadir_px`` is its pixel straight below
+    the camera. For keypoints detected in the camera's own image (the ``keypoints`` route, ``floor`` None): the
+    ``camera`` model and its ``mount``, each pixel's ray followed down to the floor (``pixels_to_floor``).
+    """
+
+    floor: FloorImage | None
+    camera: CameraModel
+    mount: CameraMount
+
+    @functools.cached_property
+    def nadir_px(self) -> np.ndarray:
+        """The floor image's pixel (u, v) straight below the camera."""
+        affine = self.floor.affine
+        return np.linalg.solve(affine[:, :2], self.mount.position[:2] - affine[:, 2])
+
+    @functools.cached_property
+    def _to_metres(self) -> tuple[np.ndarray, np.ndarray]:
+        """The floor image's affine map as (matrix, offset): pixels (N, 2) @ matrix + offset are metres."""
+        affine = self.floor.affine
+        return affine[:, :2].T.copy(), affine[:, 2].copy()
+
+    @property
+    def pixel_m(self) -> float:
+        """About how far on the floor one pixel reaches, metres."""
+        if self.floor is not None:
+            return self.floor.metres_per_pixel
+        return self.mount.height / self.camera.fx
+
+    def metres(self, uv: np.ndarray) -> np.ndarray:
+        """Floor-image pixels (N, 2) as floor points (N, 2) of base_link."""
+        matrix, offset = self._to_metres
+        return uv @ matrix + offset
+
+    def vector_metres(self, vector: np.ndarray) -> np.ndarray:
+        """A displacement (2,) in floor-image pixels as one in base_link, metres."""
+        return self._to_metres[0].T @ vector
+
+    def on_floor(self, start_px: np.ndarray, end_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pixel pairs (N, 2) as floor points of base_link (metres), and which pairs reach the floor at both ends."""
+        if self.floor is not None:
+            return self.metres(start_px), self.metres(end_px), np.ones(len(start_px), dtype=bool)
+        (start, seen_start), (end, seen_end) = (pixels_to_floor(self.camera, self.mount, p) for p in (start_px, end_px))
+        return start, end, seen_start & seen_end
+
+
+class FloorEstimator(ABC):
+    """One frame's floor motion in, the robot's increment out.
+
+    ``NAME``: the method's name in configs and on the command line. ``MOTION``: the measurement it reads (``tracks``
+    or ``keypoints``). Made once per run from the run's ``config`` and the ``geometry`` of what it measures.
+    """
+
+    NAME: ClassVar[str]
+    MOTION: ClassVar[str] = "tracks"
+
+    def __init__(self, config: OdometryConfig, geometry: FloorGeometry):
+        self.config = config
+        self.geometry = geometry
+
+    @abstractmethod
+    def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
+        """The frame's increment (dx, dy, dtheta), or None and the reason why the measurement gives none; ``dt`` is
+        the frame's duration, seconds."""
+
+
+def vector_motion(
+    measurement, geometry: FloorGeometry, statistic: str, tracks: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The floor point a motion vector measures (the median start of the kept tracks, or of those the mask ``tracks``
+    picks) and its displacement by the ``statistic`` (``median`` or ``mean``) of their vectors, both in base_link,
+    metres."""
+    starts, vectors = measurement.start, measurement.vectors
+    if tracks is not None:
+        starts, vectors = starts[tracks], vectors[tracks]
+    middle = np.median if statistic == "median" else np.mean
+    return geometry.metres(np.median(starts, axis=0)), geometry.vector_metres(middle(vectors, axis=0))

@@ -1,0 +1,25 @@
+"""``gpo-exact``: the motion vector of the floor's own tracks, turned into the exact circular arc of a rigid robot that
+does not slide at its rear axle (reverse driving and turning on the spot included).
+
+On a glossy floor the tracks of the ceiling lights' reflections move slower than the floor's; only the floor's own
+layer counts (``gpo.motion.layers.floor_layer``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gpo.motion.layers import floor_layer
+from gpo.odometry.estimators.base import FloorEstimator, vector_motion
+from gpo.odometry.kinematics import increment_from_point_motion
+
+
+class ExactArc(FloorEstimator):
+    """The exact arc that moves the measured floor point by the vector of the floor's own tracks."""
+
+    NAME = "gpo-exact"
+
+    def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
+        floor = floor_layer(measurement.start, measurement.end, self.geometry.nadir_px)
+        where, moved = vector_motion(measurement, self.geometry, self.config.vector, floor)
+        return increment_from_point_motion(where, where + moved), None

@@ -1,0 +1,29 @@
+"""``gpo-rigid``: no kinematic model; the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
+frame's increment."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from gpo.odometry.estimators.base import FloorEstimator
+from gpo.odometry.kinematics import increment_from_point_pairs
+
+RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
+
+
+class RigidFit(FloorEstimator):
+    """The rigid motion of the kept tracks, fitted on those RANSAC finds agreeing."""
+
+    NAME = "gpo-rigid"
+
+    def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
+        start, end = self.geometry.metres(measurement.start), self.geometry.metres(measurement.end)
+        threshold = RANSAC_THRESHOLD_PX * self.geometry.pixel_m
+        _, inliers = cv2.estimateAffinePartial2D(
+            start, end, method=cv2.RANSAC, ransacReprojThreshold=threshold, maxIters=200, confidence=0.995
+        )
+        if inliers is None or inliers.sum() < self.config.klt.min_tracks:
+            return None, "rigid fit: too few tracks agree"
+        chosen = inliers.ravel().astype(bool)
+        return increment_from_point_pairs(start[chosen], end[chosen]), None
