@@ -507,7 +507,8 @@ import gpo.pipeline.odometer
 import gpo.pipeline.run
 step = gpo.pipeline.odometer.FloorOdometer.step
 gpo.pipeline.odometer.FloorOdometer.step = lambda self, *args: (time.sleep(0.25), step(self, *args))[1]
-from gpo.cli import main sys.exit(main(sys.argv[1:]))
+from gpo.cli import main
+sys.exit(main(sys.argv[1:]))
 """
 
 

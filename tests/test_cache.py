@@ -12,7 +12,7 @@ import pytest
 from gpo.floor_image.analytic import analytic_table
 from gpo.floor_image.image import FloorImage
 from gpo.io import cache, datasets
-from gpo.sim.record import fingerprint_sources
+from gpo.io.fingerprint import sources as module_sources
 from gpo.sim.rigs import t265_rig
 
 
@@ -32,7 +32,7 @@ def test_the_key_is_the_sha256_of_the_canonical_json_and_the_sources():
     assert cache.key(*parts) == expected
     assert cache.key({"a": [0.5, "x"], "b": 1}, "ros1") == expected  # the order of a dict's keys does not matter
     assert cache.key({"b": 1, "a": [0.5, "x"]}, "ros2") != expected
-    sources = fingerprint_sources()
+    sources = module_sources("gpo.sim.record")
     digest = hashlib.sha256(json.dumps(parts, sort_keys=True).encode())
     for source in sources:
         digest.update(source.read_bytes())

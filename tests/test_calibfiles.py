@@ -83,7 +83,7 @@ def test_unsupported_basalt_model_is_named(tmp_path):
     path.write_text(json.dumps({"value0": {"intrinsics": [entry], "resolution": [[640, 480]]}}))
     with pytest.raises(ValueError, match=r"fov_calib\.json, camera 0: unsupported camera model 'fov'"):
         load_basalt(path)
-    with pytest.raises(TypeError, match="Basalt files are written for EUCM, DoubleSphere and KB4"):
+    with pytest.raises(TypeError, match="camera 0: Basalt files hold EUCM, DoubleSphere, KB4 cameras, not a Pinhole"):
         save_basalt(tmp_path / "x.json", [Pinhole(1.0, 1.0, 0.0, 0.0, (0.0,) * 4, 4, 4)])
 
 

@@ -10,8 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import gpo
 from gpo.io import cache
 from gpo.io.bag import Recording
+from gpo.io.fingerprint import sources
 from gpo.sim.drift import T265_DRIFT, tracking_odometry
 from gpo.sim.paths import named_plan
 from gpo.sim.record import (
@@ -19,7 +21,6 @@ from gpo.sim.record import (
     ODOMETRY_TOPIC,
     PRESETS,
     START_NS,
-    fingerprint_sources,
     preset,
     recording,
     simulate,
@@ -139,16 +140,18 @@ def test_only_the_short_presets_are_disturbed():
 
 
 def test_the_cache_key_hashes_every_module_a_recording_runs():
-    """Every gpo module that importing the simulator loads is hashed, so no change to one reuses a stale bag;
-    the tables that only read recordings are not, so changing them re-renders nothing; nor is ``gpo.io.cache``,
-    which names and places the files but does not shape what is in them."""
+    """Every gpo module that importing the simulator loads is hashed, so no change to one reuses a stale bag; the
+    method's pipeline, its tables and the book, which only read recordings, are not, so changing them re-renders
+    nothing."""
     program = (
         "import sys, gpo.sim.record\n"
         "print(*(m.__file__ for m in list(sys.modules.values()) if m.__name__.startswith('gpo.')))"
     )
     loaded = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=True).stdout.split()
-    modules = {Path(path).resolve() for path in loaded if not path.endswith("__init__.py")}
-    assert modules - {Path(cache.__file__).resolve()} == {path.resolve() for path in fingerprint_sources()}
+    hashed = {path.resolve() for path in sources("gpo.sim.record")}
+    assert {Path(path).resolve() for path in loaded} <= hashed
+    package = Path(gpo.__file__).resolve().parent
+    assert not {path for path in hashed if path.relative_to(package).parts[0] in ("pipeline", "experiments", "book")}
 
 
 def test_frames_rendered_by_two_processes_make_the_same_bag(test_bag, tmp_path):

@@ -97,9 +97,9 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
+from gpo.cameras import MODELS as MODEL_CLASSES
 from gpo.cameras.eucm import EUCM
 from gpo.cameras.files import Camera
-from gpo.cameras import MODELS as MODEL_CLASSES
 from gpo.cameras.fit import fit_model, parameter_bounds
 from gpo.cameras.pinhole import Pinhole
 from gpo.cameras.targets import Chessboard
