@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gpo.book.panels import slider
-from gpo.cameras import EUCM, T265_LIKE, Pinhole
+from gpo.cameras import EUCM, T265_LIKE, CameraModel
 
 SURFACE_COLOURS = {"floor": "tab:brown", "left wall": "tab:blue", "right wall": "tab:green", "front wall": "tab:purple"}
 
@@ -53,7 +53,7 @@ def room_grid_lines(
     return lines
 
 
-def draw_room_in_image(camera: EUCM | Pinhole, ax=None, **room) -> plt.Axes:
+def draw_room_in_image(camera: CameraModel, ax=None, **room) -> plt.Axes:
     """Draw where ``room_grid_lines(**room)`` lands in ``camera``'s image, with the image border.
 
     Invalid projections (NaN) break the lines instead of joining them across the image.
@@ -85,7 +85,7 @@ def draw_room_in_image(camera: EUCM | Pinhole, ax=None, **room) -> plt.Axes:
     return ax
 
 
-def draw_projection_curves(cameras: dict[str, EUCM | Pinhole], ax=None, max_angle_deg: float = 135.0) -> plt.Axes:
+def draw_projection_curves(cameras: dict[str, CameraModel], ax=None, max_angle_deg: float = 135.0) -> plt.Axes:
     """Image radius (pixels from the principal point) against the angle off the optical axis.
 
     Each camera is probed along its +x axis, so the curve is r(theta) = u(theta) - cx; the

@@ -13,8 +13,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from gpo.cameras.eucm import EUCM
-from gpo.cameras.pinhole import Pinhole
+from gpo.cameras.base import CameraModel
 
 
 def plane_residuals_deg(rays: np.ndarray) -> np.ndarray:
@@ -61,7 +60,7 @@ def aprilgrid_lines(tags: dict[int, np.ndarray], tag_cols: int) -> list[np.ndarr
     return lines
 
 
-def line_residuals_deg(camera: EUCM | Pinhole, lines: list[np.ndarray]) -> np.ndarray:
+def line_residuals_deg(camera: CameraModel, lines: list[np.ndarray]) -> np.ndarray:
     """The plane residuals (degrees) of every point of every line, unprojected through ``camera``."""
     residuals = []
     for pixels in lines:

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gpo.cameras import EUCM, Pinhole
+from gpo.cameras import CameraModel
 from gpo.cameras.rig import CameraMount
 from gpo.floor_image.image import (
     DEFAULT_FLOOR_IMAGE,
@@ -24,7 +24,7 @@ from gpo.floor_image.image import (
 
 
 def analytic_points(
-    camera: EUCM | Pinhole, mount: CameraMount | tuple[float, float, float], floor: FloorImage
+    camera: CameraModel, mount: CameraMount | tuple[float, float, float], floor: FloorImage
 ) -> tuple[np.ndarray, np.ndarray]:
     """Fisheye pixels (height, width, 2) of every pixel centre of ``floor``, and their validity (height, width).
 
@@ -42,7 +42,7 @@ def analytic_points(
 
 
 def pixels_to_floor(
-    camera: EUCM | Pinhole, mount: CameraMount | tuple[float, float, float], uv
+    camera: CameraModel, mount: CameraMount | tuple[float, float, float], uv
 ) -> tuple[np.ndarray, np.ndarray]:
     """The floor points (..., 2) of base_link, metres, seen at camera pixels ``uv`` (..., 2), and their validity.
 
@@ -65,7 +65,7 @@ def pixels_to_floor(
 
 
 def analytic_table(
-    camera: EUCM | Pinhole,
+    camera: CameraModel,
     mount: CameraMount | tuple[float, float, float],
     floor: FloorImage = DEFAULT_FLOOR_IMAGE,
     max_outside: float = 0.0,

@@ -91,7 +91,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gpo.cameras import EUCM, Pinhole
+from gpo.cameras import CameraModel, Pinhole
 
 FACE_NAMES = ("front", "left", "right", "bottom", "top")
 FACE_ROTATIONS = {
@@ -111,7 +111,7 @@ SEAM_TOLERANCE_PX = 1e-9  # a face holds points this close outside its square, s
 _OUTSIDE = -16.0  # remap coordinate of a masked pixel: far enough outside that only the border value is read
 
 
-def default_face_size(camera: EUCM | Pinhole) -> int:
+def default_face_size(camera: CameraModel) -> int:
     """Face size N = 2 round((fx + fy) / 2) pixels: the face's centre as dense as the fisheye's (N/2 = f)."""
     return 2 * round((camera.fx + camera.fy) / 2.0)
 
@@ -183,7 +183,7 @@ class Cubemap:
     ``face_size`` (pixels, >= 8) defaults to ``default_face_size(camera)``.
     """
 
-    def __init__(self, camera: EUCM | Pinhole, face_size: int | None = None):
+    def __init__(self, camera: CameraModel, face_size: int | None = None):
         size = default_face_size(camera) if face_size is None else face_size
         if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < MIN_FACE_SIZE:
             raise ValueError(f"face_size must be a whole number of pixels >= {MIN_FACE_SIZE}, got {face_size!r}")
@@ -267,7 +267,7 @@ def _rotate(rotation: Rotation, vectors) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def _face_maps(camera: EUCM | Pinhole, size: int, name: str) -> FaceMaps:
+def _face_maps(camera: CameraModel, size: int, name: str) -> FaceMaps:
     """Eqs. 13-18 over every pixel centre of a face, as float32 tables; computed once per arguments."""
     cubemap = Cubemap(camera, size)
     fisheye_uv, valid = cubemap.face_to_fisheye(name, cubemap.faces[name].pinhole.pixel_grid())
@@ -278,7 +278,7 @@ def _face_maps(camera: EUCM | Pinhole, size: int, name: str) -> FaceMaps:
 
 
 @functools.lru_cache(maxsize=32)
-def _remap_tables(camera: EUCM | Pinhole, size: int, name: str) -> tuple[np.ndarray, np.ndarray]:
+def _remap_tables(camera: CameraModel, size: int, name: str) -> tuple[np.ndarray, np.ndarray]:
     """``cv2.remap`` tables of a face: valid pixels clamped onto the image's pixel centres, masked ones far outside.
 
     A valid fisheye pixel within half a pixel of the image's edge reads the edge pixel (clamping

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from gpo.cameras import EUCM, Pinhole
+from gpo.cameras import CameraModel
 from gpo.cameras.mount import MountError, estimate_mount
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.floor_image.cubemap import Cubemap
@@ -170,7 +170,7 @@ def front_face_corners(fisheye_image: np.ndarray, cubemap: Cubemap, placement: F
 
 def ground_plane_image(
     fisheye_image: np.ndarray,
-    camera: EUCM | Pinhole,
+    camera: CameraModel,
     placement: FloorBoard,
     corners=None,
     face_size: int | None = None,

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 import gpo.io.cache
-from gpo.cameras import EUCM, Pinhole
+from gpo.cameras import CameraModel
 from gpo.cameras.rig import CameraMount
 
 TABLE_FORMAT = 1  # bump when the tables' meaning changes, so that old cached files are not read
@@ -155,7 +155,7 @@ class RemapTable:
 
     @classmethod
     def from_points(
-        cls, fisheye_uv: np.ndarray, valid: np.ndarray, floor: FloorImage, camera: EUCM | Pinhole, key: str
+        cls, fisheye_uv: np.ndarray, valid: np.ndarray, floor: FloorImage, camera: CameraModel, key: str
     ):
         """The table of fisheye pixels ``fisheye_uv`` (height, width, 2), valid where ``valid`` (height, width)."""
         uv = np.where(valid[..., None], fisheye_uv, np.nan).astype(np.float32)
@@ -216,7 +216,7 @@ def cached_table(description: dict, floor: FloorImage, camera, build: Callable, 
     return table
 
 
-def _camera_description(camera: EUCM | Pinhole) -> dict:
+def _camera_description(camera: CameraModel) -> dict:
     """The camera model's name and every parameter, for a cache key."""
     return {"model": type(camera).__name__, **dataclasses.asdict(camera)}
 

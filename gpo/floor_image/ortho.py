@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from gpo.cameras import EUCM, Pinhole
+from gpo.cameras import CameraModel, Pinhole
 from gpo.cameras.mount import MountError, detect_corners
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.floor_image.gpi import GroundPlaneImage, apply_homography, fit_homography, ground_plane_image
@@ -112,7 +112,7 @@ def ortho_rectify(
 
 def chessboard_route(
     fisheye_image: np.ndarray,
-    camera: EUCM | Pinhole,
+    camera: CameraModel,
     placement: FloorBoard,
     floor: FloorImage = DEFAULT_FLOOR_IMAGE,
     max_outside: float = 0.0,

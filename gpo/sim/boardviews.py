@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gpo.cameras import EUCM, Pinhole
+from gpo.cameras import CameraModel
 from gpo.cameras.targets import Chessboard
 from gpo.sim.render import render_board_view
 
@@ -31,7 +31,7 @@ class BoardView:
 
 
 def board_poses(
-    camera: EUCM | Pinhole,
+    camera: CameraModel,
     count: int,
     board: Chessboard = CALIBRATION_BOARD,
     distance: tuple[float, float] = (0.25, 0.5),
@@ -67,7 +67,7 @@ def board_poses(
     raise RuntimeError(f"found only {len(poses)} of {count} board poses that fit in the image")
 
 
-def board_views(camera: EUCM | Pinhole, count: int = 20, board: Chessboard = CALIBRATION_BOARD, seed: int = 0):
+def board_views(camera: CameraModel, count: int = 20, board: Chessboard = CALIBRATION_BOARD, seed: int = 0):
     """``count`` rendered ``BoardView`` of ``board`` at ``board_poses`` (each view's noise seeded by its index)."""
     views = []
     for index, (rotation, position) in enumerate(board_poses(camera, count, board, seed=seed)):

@@ -16,7 +16,7 @@ from __future__ import annotations
 import functools
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -24,9 +24,6 @@ from gpo.cameras import CameraModel
 from gpo.cameras.rig import CameraMount
 from gpo.floor_image.analytic import pixels_to_floor
 from gpo.floor_image.image import FloorImage
-
-if TYPE_CHECKING:
-    from gpo.pipeline.config import OdometryConfig
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,13 +79,15 @@ class FloorEstimator(ABC):
     """One frame's floor motion in, the robot's increment out.
 
     ``NAME``: the method's name in configs and on the command line. ``MOTION``: the measurement it reads (``tracks``
-    or ``keypoints``). Made once per run from the run's ``config`` and the ``geometry`` of what it measures.
+    or ``keypoints``). Made once per run from the run's ``config`` (a ``gpo.pipeline.config.OdometryConfig``, which
+    the method's later stage defines: an estimator reads the sections it needs, e.g. ``vector``, ``model``,
+    ``features``) and the ``geometry`` of what it measures.
     """
 
     NAME: ClassVar[str]
     MOTION: ClassVar[str] = "tracks"
 
-    def __init__(self, config: OdometryConfig, geometry: FloorGeometry):
+    def __init__(self, config: Any, geometry: FloorGeometry):
         self.config = config
         self.geometry = geometry
 
