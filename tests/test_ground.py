@@ -24,7 +24,7 @@ from gpo.cameras.rig import CameraMount
 from gpo.experiments.table1 import reproduce_table1
 from gpo.floor_image.analytic import analytic_points, analytic_table, pixels_to_floor, route_difference
 from gpo.floor_image.gpi import front_face_corners, ground_plane_image
-from gpo.floor_image.image import DEFAULT_FLOOR_IMAGE, FloorImage, GroundImageError
+from gpo.floor_image.image import FloorImage, GroundImageError
 from gpo.floor_image.ortho import chessboard_route, ortho_rectify
 from gpo.sim.floors import make_floor
 from gpo.sim.record import FLOOR_BOARDS, TEXEL_M, floor_board_image
@@ -33,6 +33,7 @@ from gpo.sim.rigs import downward_rig, t265_rig
 
 RIG = t265_rig()
 BOARD = FLOOR_BOARDS["t265"]
+FINE_FLOOR = FloorImage.top_view(metres_per_pixel=0.5e-3)  # the chapters' floor patch at 0.5 mm per pixel
 CHAIN_TOLERANCE_PX = 0.05
 # a floor image reaching back over the seam, so that part of it is seen through the GPI's bottom-face rows
 OVER_THE_SEAM = FloorImage.top_view(x_range=(0.64, 0.84), y_range=(-0.10, 0.10), metres_per_pixel=1e-3)
@@ -54,7 +55,7 @@ def calibration_frame() -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def ortho(calibration_frame):
-    return chessboard_route(calibration_frame, RIG.camera, BOARD)
+    return chessboard_route(calibration_frame, RIG.camera, BOARD, FINE_FLOOR)
 
 
 @pytest.fixture(scope="module")
@@ -100,7 +101,7 @@ def test_gpi_table_agrees_with_the_faces_and_eq_22_chained(ortho):
     assert_agrees_with_chain(gpi.table, chained(gpi, gpi.floor.pixel_centres()))
 
 
-@pytest.mark.parametrize("floor", [DEFAULT_FLOOR_IMAGE, OVER_THE_SEAM], ids=["ahead", "over-the-seam"])
+@pytest.mark.parametrize("floor", [FINE_FLOOR, OVER_THE_SEAM], ids=["ahead", "over-the-seam"])
 def test_composed_table_agrees_with_the_three_stages_chained(ortho, calibration_frame, floor):
     rectified = ortho_rectify(ortho.gpi, ortho.gpi.table.apply(calibration_frame), BOARD, floor, max_outside=0.01)
     gpi_uv = apply_homography(np.linalg.inv(rectified.homography), floor.pixel_centres())
@@ -176,7 +177,7 @@ def test_ortho_gpi_shows_floor_points_where_its_description_puts_them(ortho, ren
 
 
 def test_analytic_table_is_the_true_mounts_projection(renderer):
-    floor = DEFAULT_FLOOR_IMAGE
+    floor = FINE_FLOOR
     rotation, centre = camera_pose_in_world(RIG, np.zeros(3))  # the robot at the world origin: world = base_link
     xy = floor.pixel_to_base(floor.pixel_centres())
     points = np.concatenate([xy, np.zeros((*xy.shape[:-1], 1))], axis=-1)
@@ -237,7 +238,8 @@ def test_chessboard_and_analytic_routes_agree(ortho):
 def test_route_difference_reads_a_known_shift_in_millimetres():
     moved = CameraMount(RIG.mount.position + np.array([0.001, 0.0, 0.0]), RIG.mount.rotation)  # the camera 1 mm forward
     difference = route_difference(
-        analytic_table(RIG.camera, moved, cache=False), analytic_table(RIG.camera, RIG.mount, cache=False)
+        analytic_table(RIG.camera, moved, FINE_FLOOR, cache=False),
+        analytic_table(RIG.camera, RIG.mount, FINE_FLOOR, cache=False),
     )
     assert difference.mean_mm == pytest.approx(1.0, rel=0.02) and difference.max_mm == pytest.approx(1.0, rel=0.05)
 
@@ -362,7 +364,7 @@ def _suggested(message: str):
     [
         (lambda: FloorImage.top_view((0.9, 0.7)), "far > near"),
         (lambda: FloorImage.top_view(metres_per_pixel=0.0), "positive"),
-        (lambda: analytic_table(RIG.camera, (0.12, 0.1)), "height m, pitch rad, roll rad"),
+        (lambda: analytic_table(RIG.camera, (0.12, 0.1), FINE_FLOOR), "height m, pitch rad, roll rad"),
         (lambda: gpo.floor_image.ortho.block_corner_indices(BOARD.board, (4, 2)), "1 <= i <= 3"),
     ],
 )

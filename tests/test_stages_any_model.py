@@ -10,12 +10,13 @@ from gpo.cameras import KB4
 from gpo.cameras.fit import fit_model
 from gpo.floor_image.analytic import analytic_table, route_difference
 from gpo.floor_image.cubemap import Cubemap
-from gpo.floor_image.image import DEFAULT_FLOOR_IMAGE
+from gpo.floor_image.image import FloorImage
 from gpo.floor_image.ortho import chessboard_route
 from gpo.sim.record import FLOOR_BOARDS, floor_board_image
 from gpo.sim.rigs import t265_rig
 
 RIG = t265_rig()
+FINE_FLOOR = FloorImage.top_view(metres_per_pixel=0.5e-3)  # the chapters' floor patch at 0.5 mm per pixel
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -45,16 +46,16 @@ def test_cubemap_faces_of_a_kb4_camera(kb4_fit):
 
 
 def test_analytic_floor_image_of_a_kb4_camera(kb4_fit):
-    eucm_table = analytic_table(RIG.camera, RIG.mount, DEFAULT_FLOOR_IMAGE)
-    kb4_table = analytic_table(kb4_fit.camera, RIG.mount, DEFAULT_FLOOR_IMAGE)
+    eucm_table = analytic_table(RIG.camera, RIG.mount, FINE_FLOOR)
+    kb4_table = analytic_table(kb4_fit.camera, RIG.mount, FINE_FLOOR)
     difference = route_difference(kb4_table, eucm_table)
     assert difference.common_fraction == 1.0 and difference.max_px <= kb4_fit.worst_px + 1e-3
 
 
 def test_gpi_and_ortho_gpi_of_a_kb4_camera_from_the_chessboard(kb4_fit):
     frame = floor_board_image("t265", seed=0)
-    eucm_route = chessboard_route(frame, RIG.camera, FLOOR_BOARDS["t265"])
-    kb4_route = chessboard_route(frame, kb4_fit.camera, FLOOR_BOARDS["t265"])
+    eucm_route = chessboard_route(frame, RIG.camera, FLOOR_BOARDS["t265"], FINE_FLOOR)
+    kb4_route = chessboard_route(frame, kb4_fit.camera, FLOOR_BOARDS["t265"], FINE_FLOOR)
     difference = route_difference(kb4_route.table, eucm_route.table)
     # the same board corners, found in faces that differ by at most 0.1 px: the two floor images agree closely
     assert difference.common_fraction > 0.99 and difference.max_px < 0.5 and difference.mean_mm < 0.2

@@ -1,6 +1,6 @@
-"""Chapter 05, KLT flow on the floor image: a recording's floor images, the tracks and their motion vectors (the
-first paper's Fig. 17), a frame's quality and its tracks against the truth in one line, the tracker's panel, and the
-first paper's Table 3 (GPO with the mean and the median vector on the short paths)."""
+"""Chapter 05, KLT flow on the floor image: a recording's floor images, the tracks and their motion vectors (the first
+paper's Fig. 17), a frame's quality and its tracks against the truth in one line, and the tracker's panel. The first
+paper's Table 3 (the mean and the median vector on the short paths) is ``gpo.experiments.table3``."""
 
 from __future__ import annotations
 

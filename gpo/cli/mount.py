@@ -1,6 +1,6 @@
 """``python -m gpo mount``: the camera's mount measured from one image of a chessboard lying on the floor.
 
-``measure`` finds the board (once: a second board in view is an error), fits its pose with
+``gpo.cameras.mount.measure`` finds the board (once: a second board in view is an error), fits its pose with
 ``gpo.cameras.mount.mount_from_corners`` and turns the numbers into a ``CameraMount``: with the board's place on the
 floor (``--at X Y YAW``) the whole mount, without it the camera above base_link's origin, its yaw taken as zero.
 ``mount_yaml`` writes it as a config's ``mount`` section (``position_m``, ``rpy_deg``, commented with each value's

@@ -12,7 +12,6 @@ import numpy as np
 from gpo.cameras import CameraModel
 from gpo.cameras.rig import CameraMount
 from gpo.floor_image.image import (
-    DEFAULT_FLOOR_IMAGE,
     FloorImage,
     GroundImageError,
     RemapTable,
@@ -67,7 +66,7 @@ def pixels_to_floor(
 def analytic_table(
     camera: CameraModel,
     mount: CameraMount | tuple[float, float, float],
-    floor: FloorImage = DEFAULT_FLOOR_IMAGE,
+    floor: FloorImage,
     max_outside: float = 0.0,
     cache: bool = True,
 ) -> RemapTable:

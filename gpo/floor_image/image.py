@@ -45,12 +45,10 @@ class GroundImageError(ValueError):
 # same values): 0.20 x 0.20 m from 0.70 m ahead of the rear axle, base_link metres, at 1 mm per pixel. 1 mm pixels
 # track better than 0.5 mm (a floor point's error per track 0.11 mm against 0.15 mm with a 21-pixel window: the
 # window then spans twice the floor) and take a quarter of the time.
+# The one default: ``FloorImage.top_view()`` and a run config read these; the stages (``analytic_table``,
+# ``ortho_rectify``, ``chessboard_route``) take the floor image they are given and have none of their own.
 FLOOR_X_RANGE_M = (0.70, 0.90)
-
-
 FLOOR_Y_RANGE_M = (-0.10, 0.10)
-
-
 FLOOR_METRES_PER_PIXEL = 1e-3
 
 
@@ -133,8 +131,6 @@ class FloorImage:
         """Plain numbers for a cache key."""
         return {"width": self.width, "height": self.height, "affine": self.affine.tolist(), "metric": self.metric}
 
-
-DEFAULT_FLOOR_IMAGE = FloorImage.top_view(metres_per_pixel=0.5e-3)
 
 
 @dataclass(frozen=True, eq=False)

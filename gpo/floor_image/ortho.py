@@ -16,7 +16,6 @@ from gpo.cameras.mount import MountError, detect_corners
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.floor_image.gpi import GroundPlaneImage, apply_homography, fit_homography, ground_plane_image
 from gpo.floor_image.image import (
-    DEFAULT_FLOOR_IMAGE,
     FloorImage,
     GroundImageError,
     RemapTable,
@@ -87,7 +86,7 @@ def ortho_rectify(
     gpi: GroundPlaneImage,
     gpi_image: np.ndarray,
     placement: FloorBoard,
-    floor: FloorImage = DEFAULT_FLOOR_IMAGE,
+    floor: FloorImage,
     block: tuple[int, int] = DEFAULT_BLOCK,
     max_outside: float = 0.0,
     corners: np.ndarray | None = None,
@@ -114,7 +113,7 @@ def chessboard_route(
     fisheye_image: np.ndarray,
     camera: CameraModel,
     placement: FloorBoard,
-    floor: FloorImage = DEFAULT_FLOOR_IMAGE,
+    floor: FloorImage,
     max_outside: float = 0.0,
     cache: bool = True,
 ) -> OrthoRectification:

@@ -1,1 +1,2 @@
-"""Stage 3 of the method: from the floors motion to the robots (kinematics) and the estimators that do it."""
+"""Stage 3 of the method: from the floor's motion to the robot's. ``kinematics`` (scale, the first paper's bicycle
+model as printed, exact SE(2) arcs, composition) and ``estimators`` (the floor motion estimators, one plug-in each)."""

@@ -1,8 +1,8 @@
 """The floor motion estimators, one module each, registered by the name a run config's ``odometry.method`` gives.
 
 ``base`` holds what every estimator is (`FloorEstimator`) and what it is given (`FloorGeometry`). A new estimator is
-one module with a `FloorEstimator` subclass and one line here; the schema, the command line, the sweeps and the
-chapters read ``ESTIMATORS``.
+one module with a `FloorEstimator` subclass and one line here; the config's check of ``odometry.method`` (and so
+the sweeps', which load configs) and the command line's ``--method`` read ``ESTIMATORS``.
 """
 
 from gpo.odometry.estimators.base import FloorEstimator, FloorGeometry

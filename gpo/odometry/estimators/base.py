@@ -7,8 +7,8 @@ KLT flow (``gpo.motion.klt.FlowMeasurement``), or ``keypoints``, matched keypoin
 (``gpo.motion.keypoints.FeatureMatches``); where those pixels lie on the floor is its ``FloorGeometry``.
 
 A new estimator is one module of ``gpo.odometry.estimators`` holding a subclass of `FloorEstimator`, and one line in
-``gpo.odometry.estimators.ESTIMATORS``, which the config's schema, the command line's ``--method``, the sweeps and the
-documentation read.
+``gpo.odometry.estimators.ESTIMATORS``, which the config's check of its method, the command line's ``--method``
+and so the sweeps read.
 """
 
 from __future__ import annotations
