@@ -9,7 +9,9 @@ In one process, on the ``sample`` recording (441 frames, rendered on first use),
   one ``cv2.remap`` of each frame to the floor image, and one ``cv2.calcOpticalFlowPyrLK`` call per frame pair
   with the config's window and pyramid on the tracks ``FloorFlow`` had for that pair;
 - the ratio of the end-to-end time per frame to the sum of the parts: what the rest (the backward check,
-  re-detection, the estimator, Python) costs.
+  re-detection, the estimator, Python) costs;
+- streaming: the latency of ``FloorOdometer.step`` (a frame already in memory, as a robot's node receives it, to its
+  pose), median and 99th percentile over the recording's frames.
 
 Memory: peak resident set size of a fresh process running the ``test`` recording (90 frames) and the same frames
 repeated ten times in one bag (900 frames, written to a temporary folder), so that growth with length shows.
@@ -19,10 +21,12 @@ import argparse
 import subprocess
 import sys
 import tempfile
+import time
 import timeit
 from pathlib import Path
 
 import cv2
+import numpy as np
 
 from gpo.io.bag import BagWriter, Recording
 from gpo.pipeline.config import load_config
@@ -68,11 +72,25 @@ def parts(bag: Path, config, repeat: int) -> dict[str, float]:
     }
 
 
+def step_latencies_ms(bag: Path, config) -> np.ndarray:
+    """Milliseconds of each ``FloorOdometer.step`` over the recording's frames, decoded beforehand."""
+    with Recording(bag) as recorded:
+        frames = [(frame.stamp_ns, frame.image) for frame in recorded.frames(progress=False)]
+    odometer = FloorOdometer(config)
+    latencies = []
+    for stamp_ns, image in frames:
+        started = time.perf_counter()
+        odometer.step(stamp_ns, image)
+        latencies.append(time.perf_counter() - started)
+    return np.array(latencies[1:]) * 1e3  # the first frame measures nothing
+
+
 def peak_rss_mb(bag: Path, method: str) -> float:
     """Peak resident memory (MB) of a fresh process that runs the odometry on ``bag``."""
     code = (  # VmHWM, not ru_maxrss: the latter keeps the parent's peak across fork and exec
         "from pathlib import Path\n"
-        "from gpo.pipeline import load_config, run\n"
+        "from gpo.pipeline.config import load_config\n"
+        "from gpo.pipeline.run import run\n"
         f"run({str(bag)!r}, load_config().replace(method={method!r}), progress=False)\n"
         "print(next(line for line in Path('/proc/self/status').read_text().splitlines() if line.startswith('VmHWM')))\n"
     )
@@ -115,6 +133,9 @@ def main() -> None:
         print(f"  {name:20s}  {seconds / count * 1e3:6.2f} ms/frame")
     floor = sum(costs.values())
     print(f"  sum of the parts      {floor / count * 1e3:6.2f} ms/frame; end to end is {whole / floor:.2f} x that")
+    latency = step_latencies_ms(bag, config)
+    print(f"  streaming (FloorOdometer.step on a decoded frame): median {np.median(latency):.2f} ms, "
+          f"p99 {np.percentile(latency, 99):.2f} ms")
 
     short = recording("test", progress=False)
     with tempfile.TemporaryDirectory() as folder:

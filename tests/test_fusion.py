@@ -266,7 +266,7 @@ FLOOR_SIGMA = (FusionSettings().floor_speed_sigma_mps, FusionSettings().floor_tu
 
 def _simulated(path, seed, drift=None, floor_sigma=FLOOR_SIGMA, outage_s=None):
     """(floor odometry at 30 Hz: the truth's steps with white noise of ``increment_covariance(*floor_sigma)``, its
-    inliers (0 inside ``outage_s`` = (start, end) seconds), the tracking camera of ``gpo.sim.motion`` with ``drift``
+    inliers (0 inside ``outage_s`` = (start, end) seconds), the tracking camera of ``gpo.sim.drift`` with ``drift``
     (default: the T265's) seeded by ``seed`` turned into base_link, the truth at the floor's stamps as planar poses
     seen from its first)."""
     plan, mount = named_plan(path), RIGS["t265"]().mount
