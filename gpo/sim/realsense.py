@@ -11,30 +11,26 @@ place), ``camera_link -> camera_fisheye1_frame`` (the left lens, x forward, y le
 ``RealsenseRig`` is a T265 on a robot: its fisheye lens (``KB4``), where its pose frame sits (``CameraMount``
 of the fisheye's optical frame follows from ``FISHEYE1_IN_POSE``). ``RIGS`` holds the shipped T265 rig's place with
 a factory-like lens (``t265``) and one the shipped configs do not describe (``t265-high``: higher, pitched further
-down, another lens). ``simulate_realsense`` renders one of them along a named path of ``gpo.sim.motion``;
-``realsense_recording`` caches it.
+down, another lens). ``RealsenseRig.setup`` is a ``gpo.sim.record.Setup`` of one of them along a named path of
+``gpo.sim.paths``, its frames laid out by ``realsense_static_tree``; ``gpo.sim.record`` renders and caches it like any
+setup (``realsense_recording``). What is realsense-ros's here is the names of the topics and frames, the static
+tree, and the lens: a ``KB4`` camera, which the bag writer puts in camera_info as ``equidistant``.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
-from tqdm.auto import tqdm
 
 from gpo.cameras import KB4
 from gpo.cameras.rig import OPTICAL_IN_BODY, CameraMount, Rig
-from gpo.io import cache
-from gpo.io.bag import BagWriter
-from gpo.io.fingerprint import sources
-from gpo.sim.drift import T265_DRIFT, tracking_odometry
-from gpo.sim.floors import make_floor
+from gpo.sim.drift import T265_DRIFT
+from gpo.sim.floors import FloorDesign
 from gpo.sim.paths import named_plan
-from gpo.sim.record import FLOOR_MARGIN_M, GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, START_NS, TEXEL_M
-from gpo.sim.record import floor_extent as _floor_extent
-from gpo.sim.render import FloorRenderer
+from gpo.sim.record import FLOOR_MARGIN_M, TEXEL_M, Setup, StaticTransform, recording
 
 IMAGE_TOPIC = "/camera/fisheye1/image_raw"
 INFO_TOPIC = "/camera/fisheye1/camera_info"
@@ -70,6 +66,36 @@ class RealsenseRig:
         mount = CameraMount(position + rotation.apply(FISHEYE1_IN_POSE), rotation * OPTICAL_IN_BODY)
         return Rig(self.name, self.lens, mount, self.rate_hz, IMAGE_TOPIC, INFO_TOPIC, OPTICAL_FRAME)
 
+    def setup(self, path: str, seed: int) -> Setup:
+        """This T265 driving the named ``path`` over a raised floor, its tracking odometry drifting as
+        ``T265_DRIFT`` from its pose frame; ``seed`` sets the floor's texture, the sensor's noise and the drift."""
+        return Setup(
+            self.rig(),
+            named_plan(path),
+            FloorDesign(("raised",)),
+            seed,
+            T265_DRIFT,
+            TEXEL_M["t265"],
+            FLOOR_MARGIN_M["t265"],
+            tracking_mount=self.pose_in_base,
+            static_tree=realsense_static_tree,
+        )
+
+
+def realsense_static_tree(setup: Setup) -> list[StaticTransform]:
+    """realsense-ros's static frames of a T265 at ``setup.tracking_body()``: ``base_link -> camera_pose_frame`` (where
+    the robot holds it), ``-> camera_link`` (the same place), ``-> camera_fisheye1_frame`` (the left lens,
+    ``FISHEYE1_IN_POSE`` metres; x forward, y left, z up) ``-> camera_fisheye1_optical_frame`` (x right, y down,
+    z forward)."""
+    position, rotation = setup.tracking_body()
+    identity = Rotation.identity().as_quat()
+    return [
+        StaticTransform("base_link", POSE_FRAME, position, rotation.as_quat()),
+        StaticTransform(POSE_FRAME, LINK_FRAME, np.zeros(3), identity),
+        StaticTransform(LINK_FRAME, FISHEYE_FRAME, FISHEYE1_IN_POSE, identity),
+        StaticTransform(FISHEYE_FRAME, OPTICAL_FRAME, np.zeros(3), OPTICAL_IN_BODY.as_quat()),
+    ]
+
 
 RIGS = {
     "t265": RealsenseRig("t265", T265_FACTORY_LIKE, (0.60, -0.032, 0.12), (1.5, 6.0, 0.0)),
@@ -82,39 +108,12 @@ RIGS = {
 }
 
 
-def simulate_realsense(rig_name: str, path: str, out, format: str = "ros1", seed: int = 5, progress: bool = True):
-    """Render ``RIGS[rig_name]`` along the named ``path`` over a raised floor into a realsense-ros shaped bag at
-    ``out`` (``format`` ros1, ros2 or ros2-mcap); ``seed`` sets the floor's texture and the tracking's drift."""
-    chosen = RIGS[rig_name]
-    rig, plan = chosen.rig(), named_plan(path)
-    floor = make_floor("raised", _floor_extent(plan, rig, FLOOR_MARGIN_M["t265"]), TEXEL_M["t265"], seed)
-    renderer = FloorRenderer(rig, floor)
-    pose_position, pose_rotation = chosen.pose_in_base
-    with BagWriter(out, format) as bag:
-        bag.add_static_transform("base_link", POSE_FRAME, pose_position, pose_rotation.as_quat(), START_NS)
-        bag.add_static_transform(POSE_FRAME, LINK_FRAME, np.zeros(3), [0.0, 0.0, 0.0, 1.0], START_NS)
-        bag.add_static_transform(LINK_FRAME, FISHEYE_FRAME, FISHEYE1_IN_POSE, [0.0, 0.0, 0.0, 1.0], START_NS)
-        bag.add_static_transform(FISHEYE_FRAME, OPTICAL_FRAME, np.zeros(3), OPTICAL_IN_BODY.as_quat(), START_NS)
-        bag.add_trajectory(GROUND_TRUTH_TOPIC, plan.ground_truth(120.0, START_NS), msgtype="pose")
-        odometry = tracking_odometry(plan, (pose_position, pose_rotation), 200.0, T265_DRIFT, seed, START_NS)
-        bag.add_trajectory(ODOMETRY_TOPIC, odometry)
-        times = np.arange(0.0, plan.duration_s, 1.0 / rig.rate_hz)
-        for index, time_s in enumerate(tqdm(times, desc=f"rendering {rig_name} {path}", disable=not progress)):
-            state = plan.sample(np.array([time_s]))
-            image = renderer.render(np.array([state.x[0], state.y[0], state.yaw[0]]), frame_seed=(seed, index))
-            stamp_ns = START_NS + round(time_s * 1e9)
-            bag.add_image(IMAGE_TOPIC, stamp_ns, image, OPTICAL_FRAME)
-            bag.add_camera_info(INFO_TOPIC, stamp_ns, rig.camera, OPTICAL_FRAME)
-    return Path(out)
-
-
-def realsense_recording(rig_name: str = "t265", path: str = "test", format: str = "ros1", seed: int = 5) -> Path:
-    """The cached bag of ``simulate_realsense`` (made on first use; its key hashes this module and the simulator's
-    sources)."""
+def realsense_recording(
+    rig_name: str = "t265", path: str = "test", format: str = "ros1", seed: int = 5, jobs: int = 1
+) -> Path:
+    """The bag of ``RIGS[rig_name].setup(path, seed)`` (``format``: ros1, ros2 or ros2-mcap), rendered on first use by
+    ``jobs`` processes and cached by ``gpo.sim.record.recording`` as ``realsense-<rig>-<path>``."""
     if rig_name not in RIGS:
         raise ValueError(f"unknown realsense rig {rig_name!r}; the rigs are {', '.join(RIGS)}")
-    key = cache.key(asdict(RIGS[rig_name]), path, format, seed, sources=sources(__name__))
-    target = cache.path("recordings", f"realsense-{rig_name}-{path}", key, ".bag" if format == "ros1" else "")
-    if not target.exists():
-        cache.write(target, lambda partial: simulate_realsense(rig_name, path, partial, format, seed, progress=False))
-    return target
+    setup = RIGS[rig_name].setup(path, seed)
+    return recording(setup, format, progress=False, jobs=jobs, label=f"realsense-{rig_name}-{path}")

@@ -12,7 +12,9 @@ recording of any rig, path or floor (``gpo.sim.population`` draws them) is rende
 - for a rig with a tracking camera (the fisheye rig: its camera is the T265's), ``/camera/odom/sample``
   (``nav_msgs/Odometry``, 200 Hz): the tracking camera's own drifting odometry, ``camera_pose_frame`` in
   ``camera_odom_frame``, as realsense-ros publishes it;
-- ``/tf_static``: the camera's optical frame (and the tracking camera's body frame) in ``base_link``.
+- ``/tf_static``: the setup's ``static_tree``; gpo's own (``gpo_static_tree``) puts the camera's optical frame
+  (and the tracking camera's body frame) straight in ``base_link``, ``gpo.sim.realsense`` lays out a T265's frames
+  as realsense-ros does.
 
 ``recording(name)`` is the one call the notebooks make: it generates the preset's (or setup's) bag on first
 use and returns the cached file. Generation is deterministic, so the bag is the same file byte for
@@ -23,13 +25,15 @@ makes a new file.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import cv2
 import numpy as np
+from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
 from gpo.cameras.files import camera_to_kalibr
@@ -90,13 +94,42 @@ class Preset:
         )
 
 
+class StaticTransform(NamedTuple):
+    """A transform a recording puts on ``/tf_static``: frame ``child`` at ``position_m`` (3,) metres in frame
+    ``parent``, turned by the unit quaternion ``quaternion_xyzw`` (rotation parent <- child)."""
+
+    parent: str
+    child: str
+    position_m: np.ndarray
+    quaternion_xyzw: np.ndarray
+
+
+def gpo_static_tree(setup: Setup) -> list[StaticTransform]:
+    """gpo's own static frames: the camera's optical frame (``Rig.frame_id``: x right, y down, z forward) in
+    ``base_link``, and for a setup with a tracking camera its body frame ``camera_pose_frame`` (x forward, y left,
+    z up; ``Setup.tracking_body``) in ``base_link``."""
+    mount = setup.rig.mount
+    tree = [StaticTransform("base_link", setup.rig.frame_id, mount.position, mount.rotation.as_quat())]
+    if setup.drift is not None:
+        position, rotation = setup.tracking_body()
+        tree.append(StaticTransform("base_link", "camera_pose_frame", position, rotation.as_quat()))
+    return tree
+
+
 @dataclass(frozen=True, eq=False)
 class Setup:
     """Everything a recording shows: the ``rig`` driving ``plan`` over a ``floor`` made at ``texel_m`` metres per
     texel, ``floor_margin_m`` beyond the path of the robot and its camera; the ``seed`` of the floor's texture, the
-    sensor's noise and the tracking camera's drift; ``drift``: how the tracking camera's odometry drifts (a tracking
-    camera whose body frame is the rig's camera's, as the T265's fisheye is its own), or None for a rig without one;
-    the exposure, disturbances and outages as ``Preset`` has them."""
+    sensor's noise and the tracking camera's drift; ``drift``: how the tracking camera's odometry drifts, or None for a
+    rig without one; the exposure, disturbances and outages as ``Preset`` has them.
+
+    ``tracking_mount``: where the tracking camera's body frame ``camera_pose_frame`` (x forward, y left, z up) sits,
+    (position (3,) metres in ``base_link``, rotation base_link <- body); None puts it at the rig's camera's own body
+    frame (as gpo's fisheye rig is the T265's fisheye standing for the whole T265). ``static_tree``: the frames the
+    bag's ``/tf_static`` holds, computed from the setup: ``gpo_static_tree`` (gpo's own) or a driver's
+    (``gpo.sim.realsense.realsense_static_tree``). The rig names the image and camera_info topics and the optical
+    frame, and its camera model gives the camera_info's distortion model.
+    """
 
     rig: Rig
     plan: MotionPlan
@@ -109,10 +142,18 @@ class Setup:
     blur_samples: int = 3
     disturbances: Disturbances = field(default_factory=Disturbances)
     outages: tuple[Outage, ...] = ()
+    tracking_mount: tuple[np.ndarray, Rotation] | None = None
+    static_tree: Callable[[Setup], list[StaticTransform]] = gpo_static_tree
+
+    def tracking_body(self) -> tuple[np.ndarray, Rotation]:
+        """The tracking camera's body frame in ``base_link``: (position (3,) metres, rotation base_link <- body)."""
+        mount = self.rig.mount
+        return (mount.position, mount.body_rotation) if self.tracking_mount is None else self.tracking_mount
 
     def description(self) -> dict:
         """The setup in plain numbers and names (what the recording cache's key hashes)."""
         rig, plan = self.rig, self.plan
+        tracking_position, tracking_rotation = self.tracking_body()
         return {
             "rig": {
                 "name": rig.name,
@@ -135,6 +176,11 @@ class Setup:
             "blur_samples": self.blur_samples,
             "disturbances": asdict(self.disturbances),
             "outages": [asdict(outage) for outage in self.outages],
+            "tracking_body": {
+                "position_m": [float(v) for v in tracking_position],
+                "quaternion_xyzw": [float(v) for v in tracking_rotation.as_quat()],
+            },
+            "static_tree": f"{self.static_tree.__module__}.{self.static_tree.__qualname__}",
         }
 
 
@@ -284,10 +330,11 @@ def simulate(
     scene = Scene.of(what, seed)
     setup, rig, plan = scene.setup, scene.rig, scene.plan
     with BagWriter(out, format) as bag:
-        _write_static_tree(bag, setup)
+        for transform in setup.static_tree(setup):
+            bag.add_static_transform(*transform, START_NS)
         bag.add_trajectory(GROUND_TRUTH_TOPIC, plan.ground_truth(120.0, START_NS), msgtype="pose")
         if setup.drift is not None:
-            odometry = tracking_odometry(plan, rig.mount, 200.0, setup.drift, setup.seed, START_NS)
+            odometry = tracking_odometry(plan, setup.tracking_body(), 200.0, setup.drift, setup.seed, START_NS)
             bag.add_trajectory(ODOMETRY_TOPIC, odometry)
         frames = _frames(setup, scene, jobs)
         name = what if isinstance(what, str) else rig.name
@@ -337,17 +384,6 @@ def _exposure(setup: Setup, time_s: float) -> tuple[np.ndarray, np.ndarray]:
     return times, np.column_stack([state.x, state.y, state.yaw])
 
 
-def _write_static_tree(bag: BagWriter, setup: Setup) -> None:
-    """The camera's optical frame (and, with a tracking camera, its body frame) in base_link."""
-    mount = setup.rig.mount
-    bag.add_static_transform("base_link", setup.rig.frame_id, mount.position, mount.rotation.as_quat(), START_NS)
-    if setup.drift is not None:
-        bag.add_static_transform(
-            "base_link", "camera_pose_frame", mount.position, mount.body_rotation.as_quat(), START_NS
-        )
-
-
-
 def recording(
     what: str | Setup = "sample",
     format: str = "ros1",
@@ -361,13 +397,13 @@ def recording(
     the preset's name, or the rig's for a setup).
 
     Its key holds the setup (``Setup.description``), the format and the simulator's sources
-    (``gpo.io.fingerprint.sources`` of this module: the simulator and what it runs). Each process renders into a file
-    of its own and renames it into place when complete,
+    (``gpo.io.fingerprint.sources`` of this module and of the module of the setup's ``static_tree``: the simulator
+    and what it runs). Each process renders into a file of its own and renames it into place when complete,
     so processes that want the same recording at once never read one another's half-written bag (the files are
     identical). ``jobs``: processes rendering its frames.
     """
     setup, own_label = setup_of(what, seed)
-    key = cache.key(setup.description(), format, sources=sources(__name__))
+    key = cache.key(setup.description(), format, sources=sources(__name__, setup.static_tree.__module__))
     path = cache.path("recordings", label or own_label, key, ".bag" if format == "ros1" else "")
     if not path.exists():
         cache.write(path, lambda partial: simulate(what, partial, format, progress, seed, jobs))
