@@ -60,7 +60,7 @@ FLOOR_MARGIN_M = {"t265": 2.5, "downward": 0.5}  # textured floor beyond the pat
 
 @dataclass(frozen=True)
 class Preset:
-    """A recording: ``rig`` (``t265`` or ``downward``), a named ``path`` of ``gpo.sim.motion``, a floor kind.
+    """A recording: ``rig`` (``t265`` or ``downward``), a named ``path`` of ``gpo.sim.paths``, a floor kind.
 
     ``exposure_s`` > 0 blurs each frame over that exposure (``blur_samples`` poses averaged).
     ``disturbances`` put moving sheets and glints in the camera's view (none by default).
