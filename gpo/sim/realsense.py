@@ -27,7 +27,7 @@ from tqdm.auto import tqdm
 from gpo.cameras import KB4
 from gpo.cameras.rig import OPTICAL_IN_BODY, CameraMount, Rig
 from gpo.io import cache
-from gpo.io.bag import BagWriter
+from gpo.io.bag_writer import BagWriter
 from gpo.io.fingerprint import sources
 from gpo.sim.drift import T265_DRIFT, tracking_odometry
 from gpo.sim.floors import make_floor

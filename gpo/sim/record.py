@@ -36,7 +36,7 @@ from gpo.cameras.files import camera_to_kalibr
 from gpo.cameras.rig import Rig
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.io import cache
-from gpo.io.bag import BagWriter
+from gpo.io.bag_writer import BagWriter
 from gpo.io.fingerprint import sources
 from gpo.io.trajectory import Trajectory
 from gpo.sim.drift import T265_DRIFT, TrackingDrift, tracking_odometry
