@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gpo.io.bag import BagWriter, Recording
+from gpo.io.bag import Recording
+from gpo.io.bag_writer import BagWriter
 
 HEIGHT, WIDTH = 800, 848
 PERIOD_NS = 33_333_333  # 30 Hz

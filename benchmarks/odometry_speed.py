@@ -28,7 +28,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gpo.io.bag import BagWriter, Recording
+from gpo.io.bag import Recording
+from gpo.io.bag_writer import BagWriter
 from gpo.pipeline.config import load_config
 from gpo.pipeline.odometer import FloorOdometer
 from gpo.pipeline.run import run

@@ -29,7 +29,9 @@ import gpo.pipeline.odometer
 import gpo.pipeline.run
 from gpo.cameras import T265_LIKE
 from gpo.cli import main
-from gpo.io.bag import COMPRESSED_IMAGE, IMAGE, BagWriter, Recording
+from gpo.io.bag import Recording
+from gpo.io.bag_writer import BagWriter
+from gpo.io.ros_messages import COMPRESSED_IMAGE, IMAGE
 from gpo.io.trajectory import Trajectory
 
 IMAGE_TOPIC = "/camera/fisheye1/image_raw"

@@ -20,7 +20,8 @@ from rosbags.typesys import Stores, get_typestore
 from scipy.spatial.transform import Rotation
 
 from gpo.cameras import KB4, T265_LIKE, DoubleSphere, Pinhole
-from gpo.io.bag import BagWriter, Recording, StampWarning, copy_with_trajectory, describe
+from gpo.io.bag import Recording, StampWarning, describe
+from gpo.io.bag_writer import BagWriter, copy_with_trajectory
 from gpo.io.trajectory import Trajectory
 
 FORMATS = ("ros1", "ros2", "ros2-mcap")

@@ -21,7 +21,8 @@ from gpo.batch.spec import SweepSpec, load_spec
 from gpo.batch.sweep import sweep
 from gpo.batch.table import read_table
 from gpo.cli import main
-from gpo.io.bag import BagWriter, Recording
+from gpo.io.bag import Recording
+from gpo.io.bag_writer import BagWriter
 from gpo.io.trajectory import Trajectory
 from gpo.metrics import final_error
 from gpo.pipeline.config import config_to_dict, load_config

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import yaml
 
-import gpo.io.bag
+import gpo.io.bag_writer
 from gpo.cameras.files import save_kalibr
 from gpo.cameras.rig import CameraMount
 from gpo.cli import main
-from gpo.io.bag import BagWriter
+from gpo.io.bag_writer import BagWriter
 from gpo.pipeline.config import load_config
 from gpo.pipeline.propose import MARGIN_PX, check_region, floor_region, footprint
 from gpo.sim.realsense import RIGS, realsense_recording
@@ -102,12 +102,12 @@ def test_bad_bags_and_mounts_are_clear_errors_that_say_what_to_give(tmp_path, ca
     assert "does not lead from base_link to the camera's frame camera_fisheye1_optical_frame" in error
     assert "base_link -> camera_pose_frame" in error and "--mount" in error
     with monkeypatch.context() as patched:
-        patched.setattr(gpo.io.bag, "camera_info_distortion", lambda camera: ("fov", [0.92]))
+        patched.setattr(gpo.io.bag_writer, "camera_info_distortion", lambda camera: ("fov", [0.92]))
         fov = _small_bag(tmp_path / "fov.bag", rig.camera, [("base_link", rig.frame_id)])
     error = _fails(["config", str(fov), *out], capsys)
     assert "distortion model 'fov'" in error and "--camera CALIB instead" in error
     with monkeypatch.context() as patched:
-        patched.setattr(gpo.io.bag, "camera_info_distortion", lambda camera: ("equidistant", [0.0] * 4))
+        patched.setattr(gpo.io.bag_writer, "camera_info_distortion", lambda camera: ("equidistant", [0.0] * 4))
         zeros = SimpleNamespace(fx=0.0, fy=0.0, cx=0.0, cy=0.0, width=848, height=800)
         zero = _small_bag(tmp_path / "zero.bag", zeros, [("base_link", rig.frame_id)])
     error = _fails(["config", str(zero), *out], capsys)

@@ -7,7 +7,8 @@ from scipy.spatial.transform import Rotation
 
 import gpo.pipeline.run
 from gpo.fusion import FusionSettings, TrackingMount
-from gpo.io.bag import BagWriter, Recording
+from gpo.io.bag import Recording
+from gpo.io.bag_writer import BagWriter
 from gpo.io.trajectory import Trajectory
 from gpo.pipeline.config import load_config, save_config
 from gpo.pipeline.run import run, tracking_mount, tracking_path

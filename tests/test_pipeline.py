@@ -8,7 +8,8 @@ import yaml
 
 from gpo.cli import main
 from gpo.experiments.runs import board_image_path, route_config
-from gpo.io.bag import BagWriter, Recording
+from gpo.io.bag import Recording
+from gpo.io.bag_writer import BagWriter
 from gpo.io.trajectory import Trajectory
 from gpo.metrics import final_error
 from gpo.odometry.kinematics import compose

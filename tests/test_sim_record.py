@@ -14,6 +14,7 @@ import gpo
 from gpo.io import cache
 from gpo.io.bag import Recording
 from gpo.io.fingerprint import sources
+from gpo.sim.disturbances import GPI_PATCH_M
 from gpo.sim.drift import T265_DRIFT, tracking_odometry
 from gpo.sim.paths import named_plan
 from gpo.sim.record import (
@@ -26,7 +27,6 @@ from gpo.sim.record import (
     simulate,
     write_sample_data,
 )
-from gpo.sim.render import GPI_PATCH_M
 from gpo.sim.rigs import t265_rig
 
 DATA = Path(__file__).resolve().parents[1] / "data"

@@ -9,18 +9,9 @@ from scipy.spatial.transform import Rotation
 
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_views
+from gpo.sim.disturbances import GPI_PATCH_M, Disturbances, Glint, MovingSheet, print_sheet
 from gpo.sim.floors import FLOOR_KINDS, make_floor
-from gpo.sim.render import (
-    GPI_PATCH_M,
-    Disturbances,
-    FloorRenderer,
-    Glint,
-    MovingSheet,
-    Sensor,
-    camera_pose_in_world,
-    print_sheet,
-    render_board_view,
-)
+from gpo.sim.render import FloorRenderer, Sensor, camera_pose_in_world, render_board_view
 from gpo.sim.rigs import downward_rig, t265_rig
 
 RIGS = {"t265": t265_rig(), "downward": downward_rig()}

@@ -61,7 +61,7 @@ from gpo.batch.runs import (
     recording_digest,
     run_key,
 )
-from gpo.batch.table import _json_number, read_rows, write_table
+from gpo.batch.table import json_number, read_rows, write_table
 from gpo.pipeline.config import config_to_dict
 
 TABLE_EVERY_S = 10.0  # while a sweep runs its table is rewritten at most this often (each run's row.json at once)
@@ -169,6 +169,6 @@ def _keep(out: Path, outcome: Outcome, document: dict | None) -> None:
         (partial / "trajectory.summary.yaml").write_text(yaml.safe_dump(outcome.summary, sort_keys=False))
     if document is not None:
         (partial / "config.yaml").write_text(yaml.safe_dump(document, sort_keys=False, default_flow_style=None))
-    (partial / "row.json").write_text(json.dumps(outcome.row, indent=1, default=_json_number) + "\n")
+    (partial / "row.json").write_text(json.dumps(outcome.row, indent=1, default=json_number) + "\n")
     shutil.rmtree(final, ignore_errors=True)
     partial.rename(final)

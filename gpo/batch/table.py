@@ -13,7 +13,8 @@ import pandas as pd
 RESULTS = ("results.parquet", "results.csv")
 
 
-def _json_number(value):
+def json_number(value):
+    """``json.dumps``'s ``default`` for a row: a NumPy scalar as the Python number it holds."""
     if isinstance(value, np.generic):
         return value.item()
     raise TypeError(f"cannot write {value!r} into a row")

@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from gpo.cli.common import positive, save_figure
-from gpo.io.bag import POSE_TYPES, Recording
+from gpo.io.bag import Recording
 from gpo.io.outputs import check_output
+from gpo.io.ros_messages import POSE_TYPES
 from gpo.io.trajectory import Trajectory
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from gpo.cli.common import INTERRUPTED
-from gpo.io.bag import copy_with_trajectory
+from gpo.io.bag_writer import copy_with_trajectory
 from gpo.io.outputs import check_output, destination, write_with
 from gpo.pipeline.config import VECTORS, load_config, methods
 from gpo.pipeline.propose import config_from_bag

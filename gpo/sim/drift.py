@@ -13,9 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from gpo.cameras.base import finite
 from gpo.io.trajectory import NS_PER_S, Trajectory
-from gpo.sim.plans import MotionPlan, _clock
-from gpo.sim.segments import _finite, _non_negative
+from gpo.sim.plans import MotionPlan, sample_clock
+from gpo.sim.segments import non_negative
 
 
 @dataclass(frozen=True)
@@ -46,10 +47,10 @@ class TrackingDrift:
     jitter_rad: float = 5e-4
 
     def __post_init__(self):
-        _finite("TrackingDrift.scale_error", self.scale_error)
-        _finite("TrackingDrift.yaw_bias_radps", self.yaw_bias_radps)
+        finite("TrackingDrift.scale_error", self.scale_error)
+        finite("TrackingDrift.yaw_bias_radps", self.yaw_bias_radps)
         for name in ("yaw_walk_rad_per_sqrt_s", "position_walk_m_per_sqrt_s", "jitter_m", "jitter_rad"):
-            _non_negative(f"TrackingDrift.{name}", getattr(self, name))
+            non_negative(f"TrackingDrift.{name}", getattr(self, name))
 
 
 T265_DRIFT = TrackingDrift()
@@ -85,7 +86,7 @@ def _camera_in_first_pose(plan: MotionPlan, mount, rate_hz: float, start_ns: int
     world <- camera = (world <- base) (base <- camera); odometry <- camera = (world <- camera_0)⁻¹ (world <- camera).
     """
     translation, rotation = _body_mount(mount)
-    stamps_ns, times = _clock(plan.duration_s, rate_hz, start_ns)
+    stamps_ns, times = sample_clock(plan.duration_s, rate_hz, start_ns)
     state = plan.sample(times)
     base = Rotation.from_euler("z", state.yaw[:, None])
     camera_rotations = base * rotation

@@ -18,19 +18,19 @@ from typing import get_args
 
 import numpy as np
 
+from gpo.cameras.base import finite, positive
 from gpo.io.trajectory import NS_PER_S, Trajectory
 from gpo.sim.segments import (
-    _TIME_SLACK_S,
     DEFAULT_LIMITS,
     MotionLimits,
+    PathSegment,
     Segment,
     Slide,
-    _finite,
-    _junction_speeds,
-    _PathSegment,
-    _positive,
-    _SpeedProfile,
+    SpeedProfile,
+    junction_speeds,
 )
+
+_TIME_SLACK_S = 1e-9  # sample times may pass the plan's ends by one nanosecond of stamp rounding
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,7 +59,7 @@ class _Leg:
 
     segment: Segment
     start_s: float
-    speed: _SpeedProfile
+    speed: SpeedProfile
     origin: tuple[float, float, float]
 
     def state(self, tau: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -97,15 +97,15 @@ class MotionPlan:
                 raise TypeError(f"segment {number} is a {type(segment).__name__}; expected one of {names}")
         if len(start) != 3:
             raise ValueError(f"start must be (x, y, yaw), got {len(start)} numbers")
-        self.start = tuple(_finite(f"start[{i}]", value) for i, value in enumerate(start))
+        self.start = tuple(finite(f"start[{i}]", value) for i, value in enumerate(start))
         self.limits = limits
-        self._legs = self._place(_junction_speeds(self.segments, limits))
+        self._legs = self._place(junction_speeds(self.segments, limits))
         self._starts = np.array([leg.start_s for leg in self._legs])
         self.duration_s = self._legs[-1].start_s + self._legs[-1].speed.duration_s
 
-    def _place(self, junction_speeds: list[float]) -> list[_Leg]:
+    def _place(self, speeds: list[float]) -> list[_Leg]:
         legs, clock, pose = [], 0.0, self.start
-        for segment, (v_in, v_out) in zip(self.segments, itertools.pairwise(junction_speeds), strict=True):
+        for segment, (v_in, v_out) in zip(self.segments, itertools.pairwise(speeds), strict=True):
             leg = _Leg(segment, clock, segment.speed_profile(v_in, v_out, self.limits), pose)
             legs.append(leg)
             clock, pose = clock + leg.speed.duration_s, leg.end_pose()
@@ -119,7 +119,7 @@ class MotionPlan:
     @property
     def distance_m(self) -> float:
         """Path length driven, metres; reverse and slides count positive, spins and stops count zero."""
-        return sum(seg.path_length_m for seg in self.segments if isinstance(seg, _PathSegment | Slide))
+        return sum(seg.path_length_m for seg in self.segments if isinstance(seg, PathSegment | Slide))
 
     def sample(self, times_s) -> PlanarState:
         """The state at ``times_s`` (scalar or (N,) seconds within [0, ``duration_s``])."""
@@ -150,7 +150,7 @@ class MotionPlan:
 
         Exact unless ``noise_m`` (m, each of x and y) or ``noise_rad`` (yaw) ask for seeded white noise.
         """
-        stamps_ns, times = _clock(self.duration_s, rate_hz, start_ns)
+        stamps_ns, times = sample_clock(self.duration_s, rate_hz, start_ns)
         state = self.sample(times)
         rng = np.random.default_rng(seed)
         noise = rng.standard_normal((3, len(times))) * np.array([[noise_m], [noise_m], [noise_rad]])
@@ -159,10 +159,10 @@ class MotionPlan:
         )
 
 
-def _clock(duration_s: float, rate_hz: float, start_ns: int) -> tuple[np.ndarray, np.ndarray]:
+def sample_clock(duration_s: float, rate_hz: float, start_ns: int) -> tuple[np.ndarray, np.ndarray]:
     """Integer stamps (ns) every 1 / ``rate_hz`` seconds from ``start_ns`` over ``duration_s``, and the
     matching float seconds since the start."""
-    rate_hz = _positive("rate_hz", rate_hz)
+    rate_hz = positive("rate_hz", rate_hz)
     if int(start_ns) != start_ns:
         raise ValueError(f"start_ns must be an integer number of nanoseconds, got {start_ns!r}")
     count = math.floor(duration_s * rate_hz + 1e-9) + 1

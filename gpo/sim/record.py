@@ -40,15 +40,16 @@ from gpo.cameras.files import camera_to_kalibr
 from gpo.cameras.rig import Rig
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.io import cache
-from gpo.io.bag import BagWriter
+from gpo.io.bag_writer import BagWriter
 from gpo.io.fingerprint import sources
 from gpo.io.trajectory import Trajectory
+from gpo.sim.disturbances import Disturbances
 from gpo.sim.drift import T265_DRIFT, TrackingDrift, tracking_odometry
 from gpo.sim.floors import FloorDesign, make_floor
 from gpo.sim.outages import Outage, apply_outage, outage_at
 from gpo.sim.paths import named_plan
 from gpo.sim.plans import MotionPlan
-from gpo.sim.render import Disturbances, FloorRenderer
+from gpo.sim.render import FloorRenderer
 from gpo.sim.rigs import RIGS
 
 START_NS = 1_700_000_000 * 1_000_000_000  # 2023-11-14 22:13:20 UTC: the first stamp of every recording

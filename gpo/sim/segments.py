@@ -58,6 +58,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
+from gpo.cameras.base import finite, positive
+
 # composite Gauss-Legendre rule on [0, 1]: 16 panels of 8 nodes, exact to rounding for smooth headings
 _PANELS, _ORDER = 16, 8
 
@@ -71,32 +73,15 @@ _QUAD_NODES = ((np.arange(_PANELS)[:, None] + (_unit_nodes + 1) / 2) / _PANELS).
 _QUAD_WEIGHTS = np.tile(_unit_weights / (2 * _PANELS), _PANELS)
 
 
-_TIME_SLACK_S = 1e-9  # sample times may pass the plan's ends by one nanosecond of stamp rounding
-
-
-def _finite(name: str, value) -> float:
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value}")
-    return value
-
-
-def _positive(name: str, value) -> float:
-    value = _finite(name, value)
-    if value <= 0:
-        raise ValueError(f"{name} must be > 0, got {value}")
-    return value
-
-
 def _nonzero(name: str, value) -> float:
-    value = _finite(name, value)
+    value = finite(name, value)
     if value == 0:
         raise ValueError(f"{name} must not be 0")
     return value
 
 
-def _non_negative(name: str, value) -> float:
-    value = _finite(name, value)
+def non_negative(name: str, value) -> float:
+    value = finite(name, value)
     if value < 0:
         raise ValueError(f"{name} must be >= 0, got {value}")
     return value
@@ -117,7 +102,7 @@ class MotionLimits:
 
     def __post_init__(self):
         for name in ("accel_mps2", "jerk_mps3", "angular_accel_radps2", "angular_jerk_radps3"):
-            _positive(f"MotionLimits.{name}", getattr(self, name))
+            positive(f"MotionLimits.{name}", getattr(self, name))
 
 
 DEFAULT_LIMITS = MotionLimits()
@@ -167,7 +152,7 @@ def _fastest_reachable(v_from: float, v_limit: float, length: float, accel: floa
 
 
 @dataclass(frozen=True)
-class _SpeedProfile:
+class SpeedProfile:
     """Speed magnitude over one segment: ramp ``start`` -> ``peak`` in ``rise_s``, hold ``peak`` for ``hold_s``,
     ramp ``peak`` -> ``end`` in ``fall_s``, within ``accel`` and ``jerk``. Units: m/s on paths, rad/s in spins."""
 
@@ -219,10 +204,10 @@ def _speed_profile(v_in: float, cruise: float, v_out: float, length: float, acce
         peak = lowest
     else:
         peak = brentq(spare, lowest, cruise, xtol=1e-13)
-    return _SpeedProfile(v_in, peak, v_out, max(spare(peak), 0.0) / peak, accel, jerk)
+    return SpeedProfile(v_in, peak, v_out, max(spare(peak), 0.0) / peak, accel, jerk)
 
 
-class _PathSegment:
+class PathSegment:
     """Driving along a curve: signed arc length s from the start (s < 0 in reverse), curvature κ(s).
 
     Subclasses have a field ``speed_mps`` and give ``signed_length_m``, ``local_pose(s)`` -> (x, y, θ)
@@ -243,7 +228,7 @@ class _PathSegment:
         """+1 forwards, -1 in reverse."""
         return math.copysign(1.0, self.signed_length_m)
 
-    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> _SpeedProfile:
+    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> SpeedProfile:
         return _speed_profile(v_in, self.cruise_mps, v_out, self.path_length_m, limits.accel_mps2, limits.jerk_mps3)
 
     def motion(self, q, q_dot, q_ddot):
@@ -256,7 +241,7 @@ class _PathSegment:
 
 
 @dataclass(frozen=True)
-class Straight(_PathSegment):
+class Straight(PathSegment):
     """Drive straight for ``distance_m`` metres (negative: in reverse) at up to ``speed_mps`` (> 0).
 
     Pose at signed arc length s: (s, 0, 0).
@@ -267,7 +252,7 @@ class Straight(_PathSegment):
 
     def __post_init__(self):
         _nonzero("Straight.distance_m", self.distance_m)
-        _positive("Straight.speed_mps", self.speed_mps)
+        positive("Straight.speed_mps", self.speed_mps)
 
     @property
     def signed_length_m(self) -> float:
@@ -283,7 +268,7 @@ class Straight(_PathSegment):
 
 
 @dataclass(frozen=True)
-class Arc(_PathSegment):
+class Arc(PathSegment):
     """Follow a circle of ``radius_m`` until the heading has changed by ``angle_rad``, at up to |``speed_mps``|.
 
     Positive ``angle_rad`` turns counter-clockwise (a left turn driving forwards); negative ``speed_mps``
@@ -297,7 +282,7 @@ class Arc(_PathSegment):
     speed_mps: float = 0.3
 
     def __post_init__(self):
-        _positive("Arc.radius_m", self.radius_m)
+        positive("Arc.radius_m", self.radius_m)
         _nonzero("Arc.angle_rad", self.angle_rad)
         _nonzero("Arc.speed_mps", self.speed_mps)
 
@@ -319,7 +304,7 @@ class Arc(_PathSegment):
         return zero + self.kappa, zero
 
 
-class _SmoothTurn(_PathSegment):
+class _SmoothTurn(PathSegment):
     """A curve given by its heading θ(u) over the fraction u = s / S of its signed length S.
 
     κ = θ_u / S, dκ/ds = θ_uu / S²; the position is x(s) = ∫0^s cos θ, y(s) = ∫0^s sin θ, by
@@ -369,7 +354,7 @@ class Bend(_SmoothTurn):
 
     def __post_init__(self):
         _nonzero("Bend.angle_rad", self.angle_rad)
-        _positive("Bend.length_m", self.length_m)
+        positive("Bend.length_m", self.length_m)
         _nonzero("Bend.speed_mps", self.speed_mps)
 
     def heading(self, u):
@@ -407,7 +392,7 @@ class SCurve(_SmoothTurn):
     peak_heading_rad: float = field(init=False)
 
     def __post_init__(self):
-        _positive("SCurve.length_m", self.length_m)
+        positive("SCurve.length_m", self.length_m)
         _nonzero("SCurve.offset_m", self.offset_m)
         _nonzero("SCurve.speed_mps", self.speed_mps)
         ratio = self.offset_m / self.signed_length_m
@@ -434,9 +419,9 @@ class Spin:
 
     def __post_init__(self):
         _nonzero("Spin.angle_rad", self.angle_rad)
-        _positive("Spin.rate_radps", self.rate_radps)
+        positive("Spin.rate_radps", self.rate_radps)
 
-    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> _SpeedProfile:
+    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> SpeedProfile:
         return _speed_profile(
             0.0, self.rate_radps, 0.0, abs(self.angle_rad), limits.angular_accel_radps2, limits.angular_jerk_radps3
         )
@@ -454,10 +439,10 @@ class Stop:
     duration_s: float
 
     def __post_init__(self):
-        _positive("Stop.duration_s", self.duration_s)
+        positive("Stop.duration_s", self.duration_s)
 
-    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> _SpeedProfile:
-        return _SpeedProfile(0.0, 0.0, 0.0, float(self.duration_s), limits.accel_mps2, limits.jerk_mps3)
+    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> SpeedProfile:
+        return SpeedProfile(0.0, 0.0, 0.0, float(self.duration_s), limits.accel_mps2, limits.jerk_mps3)
 
     def motion(self, q, q_dot, q_ddot):
         zero = np.zeros_like(q)
@@ -476,9 +461,9 @@ class Slide:
     speed_mps: float = 0.4
 
     def __post_init__(self):
-        _finite("Slide.forward_m", self.forward_m)
-        _finite("Slide.left_m", self.left_m)
-        _positive("Slide.speed_mps", self.speed_mps)
+        finite("Slide.forward_m", self.forward_m)
+        finite("Slide.left_m", self.left_m)
+        positive("Slide.speed_mps", self.speed_mps)
         if self.forward_m == 0 and self.left_m == 0:
             raise ValueError("Slide.forward_m and Slide.left_m must not both be 0")
 
@@ -486,7 +471,7 @@ class Slide:
     def path_length_m(self) -> float:
         return math.hypot(self.forward_m, self.left_m)
 
-    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> _SpeedProfile:
+    def speed_profile(self, v_in: float, v_out: float, limits: MotionLimits) -> SpeedProfile:
         return _speed_profile(0.0, self.speed_mps, 0.0, self.path_length_m, limits.accel_mps2, limits.jerk_mps3)
 
     def motion(self, q, q_dot, q_ddot):
@@ -501,7 +486,7 @@ Segment = Straight | Arc | Bend | SCurve | Spin | Stop | Slide
 def _handover_limit(before: Segment, after: Segment) -> float:
     """Highest speed at which ``before`` may pass on to ``after`` without a jump in v or ω: both drive along
     a path in the same direction and their curvatures meet; otherwise the robot stops at the join (0)."""
-    if not (isinstance(before, _PathSegment) and isinstance(after, _PathSegment)):
+    if not (isinstance(before, PathSegment) and isinstance(after, PathSegment)):
         return 0.0
     if before.direction != after.direction:
         return 0.0
@@ -512,14 +497,14 @@ def _handover_limit(before: Segment, after: Segment) -> float:
     return min(before.cruise_mps, after.cruise_mps)
 
 
-def _junction_speeds(segments: Sequence[Segment], limits: MotionLimits) -> list[float]:
+def junction_speeds(segments: Sequence[Segment], limits: MotionLimits) -> list[float]:
     """Speed magnitudes at the n + 1 joins of n segments, at rest at both ends of the plan.
 
     Start from the handover limits, then lower each so that the acceleration limits can reach it over
     the segment before it (forward pass) and leave it over the segment after it (backward pass).
     """
     speeds = [0.0, *(_handover_limit(a, b) for a, b in itertools.pairwise(segments)), 0.0]
-    paths = [(i, seg) for i, seg in enumerate(segments) if isinstance(seg, _PathSegment)]
+    paths = [(i, seg) for i, seg in enumerate(segments) if isinstance(seg, PathSegment)]
     accel, jerk = limits.accel_mps2, limits.jerk_mps3
     for i, seg in paths:
         speeds[i + 1] = _fastest_reachable(speeds[i], speeds[i + 1], seg.path_length_m, accel, jerk)
