@@ -239,20 +239,7 @@ def test_a_runs_floor_run_is_what_the_filter_reads_of_its_frames():
 
 
 def test_the_summary_counts_the_frames_whose_flow_held_a_slower_layer():
-    """A
-    tenth
-    or
-    more
-    of
-    a
-    frame's
-    kept
-    vectors
-    in
-    a
-    slower
-    layer
-    (``gpo.motion.layers.slower_layer``) counts the
+    """A tenth or more of a frame's kept vectors in a slower layer (``gpo.motion.layers.slower_layer``) counts the
     frame."""
     nan = float("nan")
     records = [

@@ -29,16 +29,7 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
 
     The local workers start without ``WORKER_ENVIRONMENT_UNSET``. Workers of a cluster given by its address keep
     their own environment: started by ``dask worker`` they run the odometry up to 1.8x slower unless started with
-    ``--no-nanny``
-    or
-    with
-    a
-    Dask
-    config
-    file
-    that
-    sets
-    ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_``
+    ``--no-nanny`` or with a Dask config file that sets ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_``
     to ``null``."""
     import dask
     from distributed import Client, LocalCluster

@@ -1,7 +1,7 @@
 """Recordings of the simulated rigs, written as ROS bags the way a real robot's would be.
 
 A ``Preset`` names a rig, a path, a floor and a seed, and what disturbs the camera's view of the floor
-(``gpo.sim.render.Disturbances``: sheets dragged across it, glints). It stands for a ``Setup``, which holds the
+(``gpo.sim.disturbances.Disturbances``: sheets dragged across it, glints). It stands for a ``Setup``, which holds the
 things themselves (the rig, the motion plan, the floor's design, the tracking camera's drift), so that a
 recording of any rig, path or floor (``gpo.sim.population`` draws them) is rendered the same way.
 ``simulate`` drives the path, renders every camera frame and writes one bag holding:

@@ -405,27 +405,7 @@ def _wrap(values: np.ndarray, period: float) -> np.ndarray:
 
 
 def _remap_points(texture: np.ndarray, u: np.ndarray, v: np.ndarray, border: int) -> np.ndarray:
-    """Bilinear
-    samples
-    of
-    ``texture``
-    (H,
-    W)
-    or
-    (H,
-    W,
-    C)
-    at
-    the
-    points
-    (u,
-    v)
-    (pixel
-    units),
-    as
-    float32
-    (N,)
-    or
+    """Bilinear samples of ``texture`` (H, W) or (H, W, C) at the points (u, v) (pixel units), as float32 (N,) or
     (N, C)."""
     count = len(u)
     rows = -(-count // CHUNK)
