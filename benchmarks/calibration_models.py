@@ -13,7 +13,8 @@ import time
 
 import cv2
 
-from gpo.cameras.calibrate import MODELS, calibrate_corners, find_corners
+from gpo.cameras.calibrate import MODELS, calibrate_corners
+from gpo.cameras.chessboard import find_corners
 from gpo.cameras.targets import Chessboard
 from gpo.io.datasets import boofcv_fisheye_chessboard
 

@@ -13,7 +13,8 @@ import timeit
 
 import numpy as np
 
-from gpo.cameras.calibrate import calibrate_corners, calibrate_views, find_corners, initial_eucm
+from gpo.cameras.calibrate import calibrate_corners, calibrate_views, initial_eucm
+from gpo.cameras.chessboard import find_corners
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_poses, board_views
 from gpo.sim.rigs import downward_rig, t265_rig
 

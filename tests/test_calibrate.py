@@ -20,10 +20,9 @@ from gpo.cameras.calibrate import (
     calibrate_corners,
     calibrate_images,
     calibrate_views,
-    find_corners,
     initial_eucm,
-    parse_board,
 )
+from gpo.cameras.chessboard import find_corners, parse_board
 from gpo.cameras.files import load_kalibr, save_kalibr
 from gpo.cameras.targets import Chessboard
 from gpo.cli.calibrate import main_calibrate

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from gpo.cameras import EUCM, KB4, DoubleSphere, Omni
-from gpo.cameras.calibrate import MODELS, calibrate_corners, find_corners
+from gpo.cameras.calibrate import MODELS, calibrate_corners
+from gpo.cameras.chessboard import find_corners
 from gpo.cameras.files import load_boofcv
 from gpo.cameras.targets import Chessboard
 from gpo.io.datasets import DatasetUnavailable, boofcv_fisheye_chessboard

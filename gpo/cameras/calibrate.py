@@ -1,8 +1,8 @@
-"""Intrinsic camera calibration from chessboard views: corner detection, then a least-squares fit.
+"""Intrinsic camera calibration from chessboard views: a least-squares fit of any camera model to the board's corners.
 
-One module from corners to a calibration (about 880 lines): detection, the fits of every model and the result share
-the board's conventions, the rejected views and the uncertainty that ``CalibrationResult`` reports, and
-``python -m gpo calibrate`` is a thin command over them.
+The corners come from ``gpo.cameras.chessboard`` (its ``CALIBRATION`` search, in board order); this module fits.
+The fits of every model and the result share the board's conventions, the rejected views and the uncertainty that
+``CalibrationResult`` reports, and ``python -m gpo calibrate`` is a thin command over them.
 
 Every model of ``gpo.cameras`` is fitted (``MODELS``): the fisheye models EUCM (the T265 of the first
 paper), double sphere (ds), Kannala-Brandt (kb4) and Mei's unified model with radtan (omni) by our own
@@ -15,25 +15,12 @@ The camera optical frame: x right, y down, z forward, metres. The board frame is
 ``gpo.cameras.targets.Chessboard``: origin at the outer corner of the squares, x along a row of inner
 corners, y along a column, z out of the printed side, so z faces the camera. Pixels are (u, v),
 (0, 0) the centre of the top-left pixel. A pose (rotation, position) maps board points into the
-camera frame: ``p_cam = rotation.apply(p_board) + position``.
-
-The pattern size is counted in inner corners, where four squares meet, as OpenCV counts it:
-(corners per row, corners per column), which is Kalibr's (targetCols, targetRows). A board of
-8 x 6 squares has 7 x 5 inner corners; 5 x 7 finds it as well (the grid turned a quarter turn).
+camera frame: ``p_cam = rotation.apply(p_board) + position``. Pattern sizes count inner corners, and corners come
+in the board's order, both as ``gpo.cameras.chessboard`` says.
 
 Reprojection errors are residuals, projected minus detected pixels. An RMS here is taken over
 both coordinates, so it estimates the noise per coordinate; OpenCV's ``calibrateCamera`` reports
 the RMS per corner, sqrt(2) times as large. The summary gives both.
-
-Corner order
-------------
-Detected corners are ordered like ``Chessboard.inner_corners()``: row by row along the board's x
-axis, and handed so that the board's z axis faces the camera (OpenCV's detectors return the mirror
-image of that order, with z pointing away). A board is symmetric under a half turn when its
-squares are even x even (the default 8 x 6), and also under a quarter turn when it is square:
-the image cannot tell such turns apart. Where the colours can tell, corner 0 is the one at the
-black square that touches the board's origin; where they cannot, corner 0 is chosen so that the
-first row points as far to the right of the image as possible. Every view follows this one rule.
 
 The least-squares problem (EUCM; the other fisheye models alike)
 ----------------------------------------------------------------
@@ -98,6 +85,7 @@ from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
 from gpo.cameras import MODELS as MODEL_CLASSES
+from gpo.cameras.chessboard import check_pattern_size, find_corners, forms_grid, pattern_text, smaller_pattern_hint
 from gpo.cameras.eucm import EUCM
 from gpo.cameras.files import Camera
 from gpo.cameras.fit import fit_model, parameter_bounds
@@ -105,182 +93,23 @@ from gpo.cameras.pinhole import Pinhole
 from gpo.cameras.targets import Chessboard
 
 MODELS = tuple(MODEL_CLASSES)  # eucm, ds, kb4, omni, pinhole
-
-
 PINHOLE_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
-
-
 MIN_VIEWS = 3
-
-
 MAX_RMS_PX = 1.0  # a fit whose RMS reprojection error exceeds this is not a good calibration
-
-
 HUBER_SCALE_PX = 1.0
-
-
 OUTLIER_FACTOR = 3.0  # a view is an outlier when its RMS exceeds this multiple of the median view's ...
-
-
 OUTLIER_FLOOR_PX = 0.5  # ... and this many pixels
-
-
 MIN_NORMAL_SPREAD = np.radians(10.0)  # boards whose normals all lie closer than this leave f unobservable
-
-
 BOUND_TOLERANCE = 1e-3  # alpha or beta this close to a bound sits at it
-
-
 INVALID_RESIDUAL_PX = 100.0  # residual of a corner that leaves the model's valid region during the fit
-
-
 STOP_TOLERANCE = 1e-12  # the fit stops when the cost, the step or the gradient changes by less (relative)
-
-
 MAX_EVALUATIONS = 200  # a safety net (see the module docstring)
-
-
-GRID_TOLERANCE = 2.0  # see _is_grid
-
-
 UNPROJECTABLE = "the fitted model cannot project its corners"
-
-
 NOT_A_GRID = "its corners do not form the board's grid (out of order or mis-detected)"
-
-
-SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY
-
-
-PERSPECTIVE_SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE  # fast; the corners are refined in the image afterwards
-
-
-CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
-
-
-SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-3)
-
-
-PERSPECTIVE_FOV = np.radians(100.0)  # field of view of the virtual pinhole views of the detection fallback
-
-
-PERSPECTIVE_OFF_AXIS = np.radians(55.0)  # how far the outer virtual views turn from the optical axis
 
 
 class CalibrationError(ValueError):
     """The images or corners cannot give a calibration; the message says why and what to do."""
-
-
-def find_corners(
-    image: np.ndarray, pattern_size: tuple[int, int], camera_guess: EUCM | None = None
-) -> np.ndarray | None:
-    """Inner corners of a chessboard in a grey ``image``, (N, 2) pixels in board order, or None.
-
-    ``pattern_size`` = (inner corners per row, per column). OpenCV's sector-based detector is
-    tried first, then the classic one. If both miss and a ``camera_guess`` is given (a rough
-    model of a fisheye), the board is looked for in virtual pinhole views of the image, where
-    its rows are straight again, and the corners are mapped back. Corners are refined to
-    sub-pixel precision in the original image and ordered as the module docstring says.
-    """
-    corners = _find_in_image(image, pattern_size)
-    if corners is None and camera_guess is not None:
-        corners = _find_in_perspective_views(image, pattern_size, camera_guess)
-    if corners is None:
-        return None
-    corners = _refine(image, corners, pattern_size)
-    return _order_like_board(image, corners, pattern_size)
-
-
-def _find_in_image(image: np.ndarray, pattern_size: tuple[int, int]) -> np.ndarray | None:
-    found, corners = cv2.findChessboardCornersSB(image, pattern_size, flags=SB_FLAGS)
-    if not found:
-        found, corners = cv2.findChessboardCorners(image, pattern_size, flags=CLASSIC_FLAGS)
-    return corners.reshape(-1, 2).astype(np.float64) if found else None
-
-
-def _find_in_perspective_views(image: np.ndarray, pattern_size: tuple[int, int], guess: EUCM) -> np.ndarray | None:
-    """Look for the board in virtual pinhole views of ``guess``: one along the optical axis and
-    eight around it, tried nearest first to where the image holds most corner-like texture."""
-    focal = guess.fx
-    size = int(2.0 * focal * np.tan(PERSPECTIVE_FOV / 2.0))
-    centre = (size - 1) / 2.0
-    u, v = np.meshgrid(np.arange(size, dtype=np.float64), np.arange(size, dtype=np.float64))
-    rays = np.stack([(u - centre) / focal, (v - centre) / focal, np.ones_like(u)], axis=-1)
-    for turn in _perspective_turns(image, guess):
-        pixels, valid = guess.project(turn.apply(rays.reshape(-1, 3)).reshape(rays.shape))
-        pixels = np.where(valid[..., None], pixels, -1.0).astype(np.float32)
-        view = cv2.remap(image, pixels[..., 0], pixels[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        found, corners = cv2.findChessboardCornersSB(view, pattern_size, flags=PERSPECTIVE_SB_FLAGS)
-        if found:
-            view_rays = np.column_stack([(corners.reshape(-1, 2) - centre) / focal, np.ones(len(corners))])
-            back, valid = guess.project(turn.apply(view_rays))
-            if valid.all():
-                return back
-    return None
-
-
-def _perspective_turns(image: np.ndarray, guess: EUCM) -> list[Rotation]:
-    """Rotations camera <- virtual view, sorted by their angle to the strongest corner responses."""
-    turns = [Rotation.identity()]
-    for azimuth in np.radians(np.arange(0.0, 360.0, 45.0)):
-        turns.append(Rotation.from_rotvec(PERSPECTIVE_OFF_AXIS * np.array([-np.sin(azimuth), np.cos(azimuth), 0.0])))
-    response = cv2.cornerMinEigenVal(image, 5)
-    strongest = np.argpartition(response, -200, axis=None)[-200:]
-    rows, cols = np.unravel_index(strongest, response.shape)
-    ray, valid = guess.unproject([np.median(cols), np.median(rows)])
-    if not valid:
-        return turns
-    return sorted(turns, key=lambda turn: -turn.apply([0.0, 0.0, 1.0]) @ ray)
-
-
-def _refine(image: np.ndarray, corners: np.ndarray, pattern_size: tuple[int, int]) -> np.ndarray:
-    """``cv2.cornerSubPix`` with a window of 0.4 times the closest corner spacing (2 to 10 px half-size)."""
-    grid = _as_grid(corners, pattern_size)
-    spacing = min(
-        np.linalg.norm(np.diff(grid, axis=0), axis=-1).min(), np.linalg.norm(np.diff(grid, axis=1), axis=-1).min()
-    )
-    half = int(np.clip(0.4 * spacing, 2, 10))
-    refined = cv2.cornerSubPix(
-        image, corners.astype(np.float32).reshape(-1, 1, 2), (half, half), (-1, -1), SUBPIX_CRITERIA
-    )
-    return refined.reshape(-1, 2).astype(np.float64)
-
-
-def _as_grid(corners: np.ndarray, pattern_size: tuple[int, int]) -> np.ndarray:
-    per_row, per_column = pattern_size
-    return corners.reshape(per_column, per_row, 2)
-
-
-def _order_like_board(image: np.ndarray, corners: np.ndarray, pattern_size: tuple[int, int]) -> np.ndarray:
-    """The corners reordered to the board-frame convention of the module docstring."""
-    grid = _as_grid(corners, pattern_size)
-    step_x, step_y = grid[0, 1] - grid[0, 0], grid[1, 0] - grid[0, 0]
-    if step_x[0] * step_y[1] - step_x[1] * step_y[0] > 0:  # seen with z away from the camera: mirror
-        grid = grid[:, ::-1]
-    candidates = [grid, grid[::-1, ::-1]]
-    if grid.shape[0] == grid.shape[1]:
-        candidates += [np.rot90(grid), np.rot90(grid, 3)]
-    black_origin = [candidate for candidate in candidates if _origin_square_is_black(image, candidate)]
-    if 0 < len(black_origin) < len(candidates):
-        candidates = black_origin
-
-    def rightwards(candidate: np.ndarray) -> float:
-        row = candidate[0, -1] - candidate[0, 0]
-        return row[0] / np.linalg.norm(row)
-
-    return max(candidates, key=rightwards).reshape(-1, 2).copy()
-
-
-def _origin_square_is_black(image: np.ndarray, grid: np.ndarray) -> bool:
-    """Is the square at the board origin of this order darker than its neighbour along x?"""
-    step_x, step_y = grid[0, 1] - grid[0, 0], grid[1, 0] - grid[0, 0]
-    origin_square = grid[0, 0] - 0.5 * step_x - 0.5 * step_y
-    next_square = grid[0, 0] + 0.5 * step_x - 0.5 * step_y
-    return _grey(image, origin_square) < _grey(image, next_square)
-
-
-def _grey(image: np.ndarray, point: np.ndarray) -> float:
-    return float(cv2.getRectSubPix(image, (3, 3), (float(point[0]), float(point[1]))).mean())
 
 
 @dataclass(frozen=True, eq=False)
@@ -365,7 +194,7 @@ def calibrate_images(
 ) -> CalibrationResult:
     """Calibrate ``model`` from image files of a chessboard of ``pattern_size`` inner corners
     (per row, per column) and squares of ``square_m`` metres; the images are read as grey."""
-    per_row, per_column = _check_pattern_size(pattern_size)
+    per_row, per_column = check_pattern_size(pattern_size)
     if not square_m > 0:
         raise ValueError(f"the square size must be > 0 metres, got {square_m}")
     images = []
@@ -399,7 +228,7 @@ def calibrate_views(
     names = list(names) if names is not None else [f"view {index}" for index in range(len(images))]
     height, width = images[0].shape[:2]
     guess = initial_eucm(width, height) if model != "pinhole" else None
-    pattern_text = _pattern_text(board.pattern_size)
+    pattern = pattern_text(board.pattern_size)
     observed, dropped = {}, {}
     for index, image in enumerate(tqdm(images, desc="finding corners", disable=not progress)):
         if image.shape[:2] != (height, width):
@@ -407,17 +236,17 @@ def calibrate_views(
                 f"{names[index]}: image of {image.shape[1]} x {image.shape[0]} px, but {names[0]} has "
                 f"{width} x {height} px; calibrate images of one camera at one resolution"
             )
-        grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
-        corners = find_corners(grey, board.pattern_size, guess)
+        corners = find_corners(image, board.pattern_size, guess)
         if corners is None:
-            dropped[index] = f"no chessboard of {pattern_text} inner corners found"
+            dropped[index] = f"no chessboard of {pattern} inner corners found"
         else:
             observed[index] = corners
     if not observed:
         raise CalibrationError(
-            f"no chessboard of {pattern_text} inner corners (per row x per column) found in any of the "
+            f"no chessboard of {pattern} inner corners (per row x per column) found in any of the "
             f"{len(images)} images. Is the pattern size right? It counts inner corners, where four squares "
-            f"meet: a board of 8 x 6 squares has 7 x 5 inner corners.{_pattern_hint(images[0], board, names[0])}"
+            f"meet: a board of 8 x 6 squares has 7 x 5 inner corners."
+            f"{smaller_pattern_hint(images[0], board.pattern_size, names[0])}"
         )
     return _calibrate(observed, dropped, names, board, (width, height), model, fix_k3)
 
@@ -458,7 +287,7 @@ def _calibrate(
     observed, dropped, names, board, image_size, model, fix_k3=False, max_iterations=MAX_EVALUATIONS, zero=(),
     prior=None,
 ):
-    scrambled = {index for index, corners in observed.items() if not _is_grid(corners, board.pattern_size)}
+    scrambled = {index for index, corners in observed.items() if not forms_grid(corners, board.pattern_size)}
     dropped = {**dropped, **dict.fromkeys(scrambled, NOT_A_GRID)}
     observed = {index: corners for index, corners in observed.items() if index not in scrambled}
     if len(observed) < MIN_VIEWS:
@@ -475,19 +304,6 @@ def _calibrate(
     fitted, used, outliers = _fit_rejecting_outliers(fit, observed, board)
     _check_tilts(fitted)
     return _result(model, fitted, used, observed, {**dropped, **outliers}, names, board)
-
-
-def _is_grid(corners: np.ndarray, pattern_size: tuple[int, int]) -> bool:
-    """Do the corners form a grid, in order? Along every row and column, the second difference of
-    neighbouring corners must stay within ``GRID_TOLERANCE`` times the shorter of its two steps (a
-    fisheye's curvature and perspective keep it below 0.4 on real boards; a swapped pair gives 3)."""
-    grid = _as_grid(corners, pattern_size)
-    for lines in (grid, grid.transpose(1, 0, 2)):
-        steps = np.linalg.norm(np.diff(lines, axis=1), axis=-1)
-        bends = np.linalg.norm(np.diff(lines, n=2, axis=1), axis=-1)
-        if np.any(bends > GRID_TOLERANCE * np.minimum(steps[:, 1:], steps[:, :-1])):
-            return False
-    return True
 
 
 def _check_model(model: str) -> None:
@@ -835,43 +651,3 @@ def _bound_warnings(model: str, camera) -> list[str]:
             f"deviations do not hold{hint}"
         )
     return warnings
-
-
-def _check_pattern_size(pattern_size) -> tuple[int, int]:
-    per_row, per_column = (int(n) for n in pattern_size)
-    if per_row < 3 or per_column < 3 or (per_row, per_column) != tuple(pattern_size):
-        raise ValueError(
-            f"the board must have at least 3 x 3 inner corners (whole numbers, per row x per column), "
-            f"got {pattern_size}"
-        )
-    return per_row, per_column
-
-
-def _pattern_text(pattern_size: tuple[int, int]) -> str:
-    return f"{pattern_size[0]}x{pattern_size[1]}"
-
-
-def _pattern_hint(image: np.ndarray, board: Chessboard, name: str) -> str:
-    """A hint when ``image`` shows a pattern one inner corner smaller each way: either the squares were counted for
-    the corners, or the board is partly hidden (and that pattern is a part of it, which must not be calibrated)."""
-    per_row, per_column = board.pattern_size
-    smaller = per_row - 1, per_column - 1
-    if min(smaller) >= 3 and _find_in_image(image, smaller) is not None:
-        given, found = _pattern_text(board.pattern_size), _pattern_text(smaller)
-        return (
-            f" {name} shows a pattern of {found} inner corners: if {given} counted the board's squares, give "
-            f"--board {found}; if {given} is right, the board is partly hidden or cut off in the "
-            "views, and a part of it gives a wrong calibration"
-        )
-    return ""
-
-
-def parse_board(text: str) -> tuple[int, int]:
-    """``"7x5"`` -> (7, 5): inner corners per row x per column, OpenCV's pattern size and Kalibr's
-    targetCols x targetRows. A board of 8 x 6 squares is ``"7x5"``."""
-    parts = text.lower().replace(" ", "").split("x")
-    if len(parts) != 2 or not all(part.isdigit() for part in parts):
-        raise ValueError(
-            f"board '{text}': expected inner corners per row x per column, such as '7x5' for a board of 8 x 6 squares"
-        )
-    return _check_pattern_size((int(parts[0]), int(parts[1])))

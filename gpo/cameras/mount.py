@@ -39,11 +39,9 @@ The corners' pose gives the board in the camera frame: ``p_cam = R p_board + t``
 
 Finding the corners
 -------------------
-``cv2.findChessboardCornersSB`` (sub-pixel, with its accuracy flag) on the image. Where it fails,
-as it may on a fisheye's strongly distorted periphery, it runs again in distortion-free perspective
-views rendered with ``cv2.remap`` from the camera model around a few directions, and the corners
-found in a view go back to the image through the view's exact mapping: view pixel -> ray -> turned
-into the camera frame -> ``camera.project``.
+``gpo.cameras.chessboard.find_corners`` with its ``MOUNT`` search (the sector detector's own sub-pixel corners), on
+the image and, where the board is not found there, in distortion-free perspective views rendered from the camera
+model; ``detect_corners`` raises ``MountError`` where it finds no board.
 
 Solving the pose
 ----------------
@@ -79,6 +77,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from gpo.cameras.chessboard import MOUNT, find_corners, view_rotation
 from gpo.cameras.eucm import EUCM
 from gpo.cameras.files import Camera
 from gpo.cameras.pinhole import Pinhole
@@ -234,103 +233,21 @@ def floor_angles(normal, kind: str = "forward") -> tuple[float, float]:
 
 
 def detect_corners(image: np.ndarray, camera: EUCM | Pinhole, board: Chessboard, rectify: bool | None = None):
-    """The board's inner corners (N, 2) pixels in ``image``, in the detector's order.
+    """The board's inner corners (N, 2) pixels in ``image`` (8-bit, of the camera's size), in the board's order.
 
-    ``cv2.findChessboardCornersSB`` with its accuracy flag. ``rectify`` None: on the image, then,
-    if the board is not found there, in perspective views rendered from the camera model (see
-    ``perspective_view``); True: in those views only; False: on the image only. Corners found in
-    a view are mapped back to the image through the view's exact mapping. Raises ``MountError``
-    when the board is found nowhere.
+    ``gpo.cameras.chessboard.find_corners`` with its ``MOUNT`` search; ``rectify`` as there: None on the image, then
+    in perspective views rendered from the camera model; True in those views only; False on the image only. Raises
+    ``MountError`` when the board is found nowhere.
     """
-    gray = _grey(image, camera)
-    if rectify is not True:
-        corners = _find_corners(gray, board)
-        if corners is not None or rectify is False:
-            return _found_or_raise(corners, board, "in the image")
-    for axis in _view_axes(camera):
-        view, rotation, focal = perspective_view(gray, camera, axis)
-        corners = _find_corners(view, board)
-        if corners is not None:
-            return _view_to_image(corners, camera, rotation, focal, view.shape[0])
-    return _found_or_raise(None, board, "in the image or in its perspective views")
-
-
-def perspective_view(
-    image: np.ndarray, camera: EUCM | Pinhole, axis, field_of_view: float = np.radians(90.0)
-) -> tuple[np.ndarray, Rotation, float]:
-    """A distortion-free pinhole view of ``image`` looking along ``axis`` (3,) of the camera frame.
-
-    The view is square, ``field_of_view`` radians wide, at the camera's mean focal length in pixels,
-    or less where that would make it wider than the camera's image; its x axis is square to the
-    camera's y axis, so image rows stay rows. Returns the view, camera <- view rotation and the view's
-    focal length (pixels; principal point at its centre).
-    """
-    rotation = _view_rotation(axis)
-    half_width = np.tan(field_of_view / 2.0)
-    focal = min(0.5 * (camera.fx + camera.fy), max(camera.width, camera.height) / (2.0 * half_width))
-    size = round(2.0 * focal * half_width)
-    pixels = np.stack(np.meshgrid(np.arange(size), np.arange(size)), axis=-1).astype(float)
-    source, _ = camera.project(rotation.apply(_view_rays(pixels, focal, size).reshape(-1, 3)))
-    maps = np.nan_to_num(source, nan=-1.0).astype(np.float32).reshape(size, size, 2)
-    return cv2.remap(image, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR), rotation, focal
-
-
-def _grey(image: np.ndarray, camera: EUCM | Pinhole) -> np.ndarray:
-    """``image`` as one 8-bit channel, after checking it is 8-bit and of the camera's size."""
-    image = np.asarray(image)
-    if image.dtype != np.uint8:
-        raise ValueError(f"image must be 8-bit (uint8), got {image.dtype}")
-    if image.shape[:2] != (camera.height, camera.width):
-        raise ValueError(
-            f"image is {image.shape[1]} x {image.shape[0]} pixels but the camera model is "
-            f"{camera.width} x {camera.height}"
-        )
-    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
-
-
-def _find_corners(gray: np.ndarray, board: Chessboard) -> np.ndarray | None:
-    found, corners = cv2.findChessboardCornersSB(gray, board.pattern_size, flags=cv2.CALIB_CB_ACCURACY)
-    return corners.reshape(-1, 2).astype(float) if found else None
-
-
-def _found_or_raise(corners: np.ndarray | None, board: Chessboard, where: str) -> np.ndarray:
+    corners = find_corners(image, board.pattern_size, camera, MOUNT, rectify)
     if corners is None:
         nx, ny = board.pattern_size
+        where = "in the image" if rectify is False else "in the image or in its perspective views"
         raise MountError(
             f"chessboard of {nx} x {ny} inner corners ({board.squares[0]} x {board.squares[1]} squares) "
             f"not found {where}"
         )
     return corners
-
-
-def _view_axes(camera: EUCM | Pinhole) -> list[np.ndarray]:
-    """Axes of the perspective views tried for detection: the rays of a 3 x 3 grid of pixels, centre first."""
-    u = camera.width * np.array([0.5, 0.2, 0.8])
-    v = camera.height * np.array([0.5, 0.8, 0.2])
-    grid = np.stack(np.meshgrid(u, v), axis=-1).reshape(-1, 2)
-    rays, valid = camera.unproject(grid)
-    return list(rays[valid])
-
-
-def _view_rotation(axis) -> Rotation:
-    """camera <- view for a view whose optical axis is ``axis`` and whose x axis is square to the camera's y
-    (to its x when ``axis`` is nearly the camera's y)."""
-    z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    x = np.cross([0.0, 1.0, 0.0] if abs(z[1]) < 0.9 else [1.0, 0.0, 0.0], z)
-    x /= np.linalg.norm(x)
-    return Rotation.from_matrix(np.column_stack([x, np.cross(z, x), z]))
-
-
-def _view_rays(pixels: np.ndarray, focal: float, size: int) -> np.ndarray:
-    """Rays (..., 3) in a view's frame of its ``pixels`` (..., 2)."""
-    centre = (size - 1) / 2.0
-    return np.concatenate([(pixels - centre) / focal, np.ones((*pixels.shape[:-1], 1))], axis=-1)
-
-
-def _view_to_image(corners: np.ndarray, camera: EUCM | Pinhole, rotation: Rotation, focal: float, size: int):
-    """Corners (N, 2) found in a ``size`` x ``size`` perspective view, as pixels (N, 2) of the camera's image."""
-    pixels, _ = camera.project(rotation.apply(_view_rays(corners, focal, size)))
-    return pixels
 
 
 def _placement_pose(placement, board: Chessboard) -> tuple[float, float, float] | None:
@@ -396,7 +313,7 @@ def _choose_order(rays, board: Chessboard, kind: str, yaw_board: float, expected
 
 def _initial_pose(rays: np.ndarray, board: Chessboard) -> tuple[Rotation, np.ndarray]:
     """camera <- board from unit rays (N, 3) by IPPE in a virtual pinhole looking along their mean."""
-    view = _view_rotation(rays.mean(axis=0))
+    view = view_rotation(rays.mean(axis=0))
     in_view = view.inv().apply(rays)
     if (in_view[:, 2] <= 0).any():
         raise MountError("the corners' rays span more than a hemisphere: no planar board fits them")

@@ -7,7 +7,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from gpo.cameras import MODELS
-from gpo.cameras.calibrate import CalibrationResult, calibrate_images, parse_board
+from gpo.cameras.calibrate import CalibrationResult, calibrate_images
+from gpo.cameras.chessboard import parse_board
 from gpo.cameras.files import save_kalibr
 from gpo.cli.common import positive
 from gpo.io.outputs import check_output, destination, write_with

@@ -20,7 +20,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gpo.cameras.calibrate import parse_board
+from gpo.cameras.chessboard import parse_board
 from gpo.cameras.files import Camera
 from gpo.cameras.mount import MeasuredMount, MountError, measure
 from gpo.cameras.rig import CameraMount
