@@ -1,3 +1,4 @@
+# long: one job, a camera's intrinsics by least squares; a hundred lines of it are the method's notes, the docstring
 """Intrinsic camera calibration from chessboard views: a least-squares fit of any camera model to the board's corners.
 
 The corners come from ``gpo.cameras.chessboard`` (its ``CALIBRATION`` search, in board order); this module fits.
