@@ -77,10 +77,9 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from gpo.cameras.base import CameraModel
 from gpo.cameras.chessboard import MOUNT, find_corners, view_rotation
-from gpo.cameras.eucm import EUCM
 from gpo.cameras.files import Camera
-from gpo.cameras.pinhole import Pinhole
 from gpo.cameras.rig import CameraMount
 from gpo.cameras.targets import Chessboard, FloorBoard
 
@@ -157,7 +156,7 @@ class MountEstimate:
 
 def estimate_mount(
     image: np.ndarray,
-    camera: EUCM | Pinhole,
+    camera: CameraModel,
     board: Chessboard,
     placement: FloorBoard | tuple[float, float, float] | None = None,
     kind: str = "forward",
@@ -178,7 +177,7 @@ def estimate_mount(
 
 def mount_from_corners(
     corners_px,
-    camera: EUCM | Pinhole,
+    camera: CameraModel,
     board: Chessboard,
     placement: FloorBoard | tuple[float, float, float] | None = None,
     kind: str = "forward",
@@ -232,7 +231,7 @@ def floor_angles(normal, kind: str = "forward") -> tuple[float, float]:
     return float(np.arctan2(-m[0], np.hypot(m[1], m[2]))), float(np.arctan2(m[1], m[2]))
 
 
-def detect_corners(image: np.ndarray, camera: EUCM | Pinhole, board: Chessboard, rectify: bool | None = None):
+def detect_corners(image: np.ndarray, camera: CameraModel, board: Chessboard, rectify: bool | None = None):
     """The board's inner corners (N, 2) pixels in ``image`` (8-bit, of the camera's size), in the board's order.
 
     ``gpo.cameras.chessboard.find_corners`` with its ``MOUNT`` search; ``rectify`` as there: None on the image, then
@@ -264,7 +263,7 @@ def _placement_pose(placement, board: Chessboard) -> tuple[float, float, float] 
     return tuple(values.tolist())
 
 
-def _corner_rays(corners_px, camera: EUCM | Pinhole, board: Chessboard) -> np.ndarray:
+def _corner_rays(corners_px, camera: CameraModel, board: Chessboard) -> np.ndarray:
     """Unit rays (N, 3) of the corners, after checking their number and that each has a ray."""
     nx, ny = board.pattern_size
     if nx < 2 or ny < 2:
@@ -329,13 +328,13 @@ def _perturbed(pose: tuple[Rotation, np.ndarray], delta: np.ndarray) -> tuple[Ro
     return pose[0] * Rotation.from_rotvec(delta[:3]), pose[1] + delta[3:]
 
 
-def _reprojection(corners: np.ndarray, camera: EUCM | Pinhole, board: Chessboard, pose) -> np.ndarray:
+def _reprojection(corners: np.ndarray, camera: CameraModel, board: Chessboard, pose) -> np.ndarray:
     """Reprojection errors (2N,) pixels of the board at ``pose``; 1000 px where a corner does not project."""
     projected, valid = camera.project(pose[0].apply(board.inner_corners()) + pose[1])
     return np.where(valid[:, None], projected - corners, 1e3).ravel()
 
 
-def _refine_pose(corners: np.ndarray, camera: EUCM | Pinhole, board: Chessboard, initial):
+def _refine_pose(corners: np.ndarray, camera: CameraModel, board: Chessboard, initial):
     """camera <- board minimising the corners' reprojection error in pixels, from ``initial``."""
     fit = least_squares(
         lambda delta: _reprojection(corners, camera, board, _perturbed(initial, delta)),
@@ -375,7 +374,7 @@ def _mount_in_base(pose, board_pose) -> CameraMount:
     return CameraMount(position, board_in_base * rotation.inv())
 
 
-def _uncertainties(corners, camera: EUCM | Pinhole, board: Chessboard, pose, kind: str, board_pose) -> dict[str, float]:
+def _uncertainties(corners, camera: CameraModel, board: Chessboard, pose, kind: str, board_pose) -> dict[str, float]:
     """One-sigma uncertainties of ``_mount_numbers`` at ``pose``: the pose's covariance, the residuals' variance
     times (J^T J)^-1, carried through the numbers' Jacobian."""
     residual_jacobian = _jacobian(lambda delta: _reprojection(corners, camera, board, _perturbed(pose, delta)))

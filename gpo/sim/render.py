@@ -29,7 +29,7 @@ import numpy as np
 import skimage.data
 from scipy.spatial.transform import Rotation
 
-from gpo.cameras import EUCM, Pinhole
+from gpo.cameras import CameraModel
 from gpo.cameras.rig import Rig, floor_points, rays_in_base
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.sim.disturbances import SHEET_PAD, Glint, MovingSheet, print_sheet
@@ -324,7 +324,7 @@ class FloorRenderer:
 
 
 def render_board_view(
-    camera: EUCM | Pinhole,
+    camera: CameraModel,
     board: Chessboard,
     board_in_camera: tuple[Rotation, np.ndarray],
     seed: int = 0,
@@ -357,7 +357,7 @@ def render_board_view(
 
 
 @functools.lru_cache(maxsize=4)
-def _pixel_rays(camera: EUCM | Pinhole) -> tuple[np.ndarray, np.ndarray]:
+def _pixel_rays(camera: CameraModel) -> tuple[np.ndarray, np.ndarray]:
     """Rays and validity of every pixel centre of ``camera``, kept for the next view of the same camera."""
     rays, valid = camera.unproject(camera.pixel_grid())
     rays.flags.writeable = valid.flags.writeable = False
