@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -529,8 +530,8 @@ def test_a_signal_to_the_process_keeps_the_frames_done(world, tmp_path, signum):
     command = [sys.executable, "-c", SLOW_MAIN, *map(str, arguments)]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True,
                                preexec_fn=_as_from_a_terminal)
-    seen = ""
-    while "| 2/12" not in seen and process.poll() is None:  # the progress bar: frames are being read
+    seen = ""  # the progress bar counts frames read, and from two threads on they are read a few ahead
+    while not re.search(r"\| *([2-9]|1[01])/12", seen) and process.poll() is None:
         seen += process.stderr.read(1)
     process.send_signal(signum)
     _, err = process.communicate(timeout=60)

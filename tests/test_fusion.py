@@ -7,15 +7,8 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
-from gpo.fusion import (
-    FilterDiverged,
-    FusionSettings,
-    OdometryFusion,
-    ProcessNoise,
-    fuse,
-    increment_covariance,
-    increment_jacobians,
-)
+from gpo.fusion import FilterDiverged, FusionSettings, OdometryFusion, fuse, increment_covariance
+from gpo.fusion.ekf import ProcessNoise, increment_jacobians
 from gpo.io.trajectory import Trajectory, base_from_sensor_odometry
 from gpo.odometry.kinematics import arc_increment, between, integrate
 from gpo.sim.drift import T265_DRIFT, TrackingDrift, tracking_odometry

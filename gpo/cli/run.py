@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from gpo.cli.common import INTERRUPTED
+from gpo.cli.common import INTERRUPTED, available_cores, whole_number
 from gpo.io.bag_writer import copy_with_trajectory
 from gpo.io.outputs import check_output, destination, write_with
 from gpo.pipeline.config import VECTORS, load_config, methods
@@ -27,6 +27,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--topic", help="image topic (default: the config's, else the bag's only one)")
     parser.add_argument("--write-bag", type=Path, help="a copy of the bag with the estimate on /gpo/odom")
     parser.add_argument("--force", action="store_true", help="a flagged result replaces --out too")
+    parser.add_argument(
+        "--threads", type=whole_number, default=min(2, available_cores()),
+        help="threads: from 2 on, the next frames are read and prepared while one is tracked, and OpenCV shares its "
+        "work among them (default 2, or 1 on a one-core machine)",
+    )
 
 
 def print_run(result: OdometryResult) -> None:
@@ -70,7 +75,7 @@ def run(args) -> int:
         outputs = [*inputs, args.out, summary_path_of(args.out)]
         check_output(args.write_bag, outputs, "--write-bag", needed_bytes=_bytes(args.bag))
     try:
-        result = run_odometry(args.bag, config, args.topic)
+        result = run_odometry(args.bag, config, args.topic, threads=args.threads)
     except ValueError as error:
         raise ValueError(f"{error} (config: {origin})") from None
     print_run(result)

@@ -36,6 +36,7 @@ import cv2
 import numpy as np
 
 from gpo.motion.layers import slower_count, slower_layer
+from gpo.motion.median import median_of
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
 
@@ -186,6 +187,15 @@ class FlowMeasurement:
         return quality.tracked, quality.kept, quality.inliers, quality.spread_px, quality.slower
 
 
+@dataclass(frozen=True, eq=False)
+class FlowFrame:
+    """A floor image made ready to track (``FloorFlow.prepare``): flat-fielded and scaled to one mean and contrast
+    (``image``, uint8), with its local contrast beyond noise (``texture``, grey levels; ``floor_texture``)."""
+
+    image: np.ndarray
+    texture: float
+
+
 @dataclass
 class FloorFlow:
     """Frame-to-frame KLT tracking on a stream of floor images of one size.
@@ -213,14 +223,22 @@ class FloorFlow:
         self._image, self._points = None, None
         self._velocity, self._predicted = np.zeros(2, np.float32), False
 
-    def track(self, image: np.ndarray, time_s: float | None = None) -> FlowMeasurement | None:
-        """The motion from the previous frame to ``image`` (H, W) uint8; None for the first frame.
+    def prepare(self, image: np.ndarray) -> FlowFrame:
+        """``image`` (H, W) uint8 made ready to track (``FlowFrame``). It depends on the image alone, so frames can be
+        prepared ahead, in another thread, while earlier ones are tracked."""
+        self._check(image)
+        return FlowFrame(*self._normalised(image))
+
+    def track(self, image: np.ndarray | FlowFrame, time_s: float | None = None) -> FlowMeasurement | None:
+        """The motion from the previous frame to ``image`` (H, W) uint8, or to the frame ``prepare`` made of it;
+        None for the first frame.
 
         ``time_s``: the frame's time in seconds, so that the predicted motion scales with the time since the
         previous frame (a dropped frame doubles it); None counts frames instead.
         """
-        self._check(image)
-        image, texture = self._normalised(image)
+        prepared = image if isinstance(image, FlowFrame) else self.prepare(image)
+        image, texture = prepared.image, prepared.texture
+        self._check(image)  # a frame another tracker prepared
         previous, points, previous_texture = self._image, self._points, self._texture
         elapsed = 1.0 if time_s is None or previous is None else time_s - self._time_s
         self._image, self._texture, self._time_s = image, texture, 0.0 if time_s is None else time_s
@@ -265,9 +283,9 @@ class FloorFlow:
             flag = f"too few tracks kept ({len(start)} of {len(points)}): a bad or blurred frame"
             return _flagged(start, end, len(points), flag), end
         vectors = end - start
-        median = np.median(vectors, axis=0)
+        median = median_of(vectors, axis=0)
         distance = np.hypot(*(vectors - median).T)
-        spread = MAD_TO_SIGMA * float(np.median(distance))
+        spread = MAD_TO_SIGMA * float(median_of(distance))
         inlier = distance <= max(p.inlier_px, 3.0 * spread)
         quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=slower_count(vectors, median))
         flag = None

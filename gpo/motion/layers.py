@@ -14,6 +14,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from gpo.motion.median import median_of
+
 SLOWER_SPEED = 0.5  # a kept vector moving along the median at under this share of its length is in a slower layer
 
 
@@ -70,15 +72,24 @@ def floor_layer(start: np.ndarray, end: np.ndarray, nadir: np.ndarray) -> np.nda
         return everything
     rotation = fit[:, :2] / np.hypot(fit[0, 0], fit[1, 0])  # the fit is scale times rotation
     moved = end - nadir - (start - nadir) @ rotation.T  # each track's displacement once the rotation is out
-    blend = np.median(moved, axis=0)
-    near = np.linalg.norm(moved[:, None] - moved[None], axis=2) < LAYER_RADIUS_PX
+    lengths = _lengths(moved)
+    # a reflection's track moves under half its layer's vector (|moved|^2 < (0.5 L)^2 + r^2), and a layer's vector L
+    # is a median of tracks, no longer than the longest components' hypotenuse: too few such short tracks, no layers
+    reach = np.hypot(*np.abs(moved).max(axis=0))
+    if np.count_nonzero(lengths**2 < (1 + 1e-9) * (0.25 * reach**2 + LAYER_RADIUS_PX**2)) < LAYER_MIN_TRACKS:
+        return everything
+    blend = median_of(moved, axis=0)
+    near = _lengths(moved[:, None] - moved[None]) < LAYER_RADIUS_PX
+    neighbours = near.sum(axis=1)
     tried = set()  # the groups already judged: on a tight floor most tracks have the very same neighbours
-    for seed in np.argsort(-np.linalg.norm(moved, axis=1)):  # the farthest-moving tracks first
+    for seed in np.argsort(-lengths):  # the farthest-moving tracks first
+        if neighbours[seed] < LAYER_MIN_TRACKS:
+            continue
         group = np.packbits(near[seed]).tobytes()
-        if near[seed].sum() < LAYER_MIN_TRACKS or group in tried:
+        if group in tried:
             continue
         tried.add(group)
-        centre = np.median(moved[near[seed]], axis=0)
+        centre = median_of(moved[near[seed]], axis=0)
         length = float(np.hypot(*centre))
         if length < SLOWER_MIN_PX:
             break
@@ -87,6 +98,12 @@ def floor_layer(start: np.ndarray, end: np.ndarray, nadir: np.ndarray) -> np.nda
             continue  # the tracks' median is not on this group's line: not the floor's layers
         along = moved @ centre / length**2  # each track's displacement along the group's, in units of it
         mirrored = (along > -0.1) & (along < 0.5) & (np.abs(moved @ normal) < LAYER_RADIUS_PX)
-        if mirrored.sum() >= LAYER_MIN_TRACKS and MIRROR_SHARE[0] <= np.median(along[mirrored]) <= MIRROR_SHARE[1]:
-            return np.linalg.norm(moved - centre, axis=1) < LAYER_RADIUS_PX
+        if mirrored.sum() >= LAYER_MIN_TRACKS and MIRROR_SHARE[0] <= median_of(along[mirrored]) <= MIRROR_SHARE[1]:
+            return _lengths(moved - centre) < LAYER_RADIUS_PX
     return everything
+
+
+def _lengths(vectors: np.ndarray) -> np.ndarray:
+    """The lengths of ``vectors`` (..., 2), the sum of squares as ``np.linalg.norm`` forms it (a reduction over an axis
+    of two is several times slower than the two terms)."""
+    return np.sqrt(vectors[..., 0] * vectors[..., 0] + vectors[..., 1] * vectors[..., 1])

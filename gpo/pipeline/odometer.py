@@ -15,7 +15,7 @@ from gpo.floor_image.gpi import ground_plane_image
 from gpo.floor_image.image import RemapTable
 from gpo.floor_image.ortho import ortho_rectify
 from gpo.motion.keypoints import FeatureMatches, FeatureTracker, Keypoints, detect
-from gpo.motion.klt import FloorFlow, FlowMeasurement
+from gpo.motion.klt import FloorFlow, FlowFrame, FlowMeasurement
 from gpo.odometry.estimators import FloorGeometry
 from gpo.odometry.kinematics import (
     compose,
@@ -55,6 +55,13 @@ class Unreadable:
     """A frame that could not be read, in its image's place: ``reason`` says why (``FloorOdometer.step`` skips it)."""
 
     reason: str
+
+
+@dataclass(frozen=True)
+class OtherSize(Unreadable):
+    """A frame whose ``size`` (width, height) is not the calibration's: skipped, or refused when it is the first."""
+
+    size: tuple[int, int] = (0, 0)
 
 
 @dataclass(frozen=True)
@@ -105,14 +112,17 @@ class FloorOdometer:
         with ``gray=True`` turns colour to grey); for the ``keypoints`` route the 8-bit frame itself. A clear error
         when its size is not the calibration's."""
         if image.shape[:2] != self._frame_shape:
-            height, width = self._frame_shape
-            raise ValueError(
-                f"the images are {image.shape[1]} x {image.shape[0]} pixels, but the camera of the config's rig "
-                f"'{self.config.rig.name}' is {width} x {height}: wrong --topic, or a config of another camera"
-            )
+            raise ValueError(self._size_error(image.shape[1::-1]))
         if image.dtype == np.uint16:
             image = (image >> 8).astype(np.uint8)
         return image if self.config.route is Route.KEYPOINTS else self.table.apply(image)
+
+    def _size_error(self, size: tuple[int, int]) -> str:
+        height, width = self._frame_shape
+        return (
+            f"the images are {size[0]} x {size[1]} pixels, but the camera of the config's rig "
+            f"'{self.config.rig.name}' is {width} x {height}: wrong --topic, or a config of another camera"
+        )
 
     @property
     def _frame_shape(self) -> tuple[int, int]:
@@ -127,19 +137,35 @@ class FloorOdometer:
             raise ValueError(f"keypoints are read by a keypoint method, this odometer's method is {self.config.method}")
         return detect(self.floor_image(image), self.config.features, self._mask)
 
-    def step(self, stamp_ns: int, image: np.ndarray | Keypoints) -> FrameRecord:
-        """Take one camera frame (H, W) in stamp order, or for a keypoint method its ``keypoints``; return its record.
-        A frame that cannot be read (``Unreadable``), or after the first one whose size is not the calibration's, is
-        skipped and flagged with the reason."""
+    def prepare(self, image: np.ndarray | Unreadable) -> FlowFrame | Keypoints | Unreadable:
+        """What ``step`` does to a camera frame (H, W) before it tracks it, which depends on the frame alone: its floor
+        image made ready for the KLT flow (``FlowFrame``), or for a keypoint method its ``keypoints``; a frame of
+        another size than the calibration's as ``OtherSize``. Frames can so be prepared ahead, in another thread,
+        while the odometer steps through earlier ones (``gpo.pipeline.run.odometry`` with ``threads``)."""
+        if not isinstance(image, np.ndarray):
+            return image  # unreadable, or prepared already
+        if image.shape[:2] != self._frame_shape:
+            size = image.shape[1::-1]
+            return OtherSize(f"{size[0]} x {size[1]} pixels, not the calibration's", size)
+        if self.estimator.MOTION == "keypoints":
+            return self.keypoints(image)
+        return self.motion.prepare(self.floor_image(image))
+
+    def step(self, stamp_ns: int, image: np.ndarray | FlowFrame | Keypoints | Unreadable) -> FrameRecord:
+        """Take one camera frame (H, W) in stamp order, or what ``prepare`` made of it; return its record. A frame that
+        cannot be read (``Unreadable``), or after the first one whose size is not the calibration's, is skipped and
+        flagged with the reason."""
         previous = self._stamp_ns
-        if isinstance(image, np.ndarray) and previous is not None and image.shape[:2] != self._frame_shape:
-            image = Unreadable(f"{image.shape[1]} x {image.shape[0]} pixels, not the calibration's")
+        if isinstance(image, np.ndarray):
+            image = self.prepare(image)
+        if isinstance(image, OtherSize) and previous is None:
+            raise ValueError(self._size_error(image.size))
         if isinstance(image, Unreadable):
             return self._record(stamp_ns, None, Status.SKIPPED, f"unreadable frame: {image.reason}")
         if previous is not None and stamp_ns <= previous:
             problem = "repeats" if stamp_ns == previous else f"is {(previous - stamp_ns) * 1e-9:.3f} s before"
             return self._record(stamp_ns, None, Status.SKIPPED, f"stamp out of order: {problem} the previous; skipped")
-        floor = image if isinstance(image, Keypoints) else self.floor_image(image)
+        floor = image
         self._stamp_ns = stamp_ns
         if previous is None:
             self._track(floor, stamp_ns)
@@ -162,9 +188,9 @@ class FloorOdometer:
         self._measured_ns = stamp_ns
         return self._record(stamp_ns, measurement, Status.MEASURED)
 
-    def _track(self, floor: np.ndarray | Keypoints, stamp_ns: int) -> FlowMeasurement | FeatureMatches | None:
+    def _track(self, floor: FlowFrame | Keypoints, stamp_ns: int) -> FlowMeasurement | FeatureMatches | None:
         if isinstance(self.motion, FeatureTracker):
-            return self.motion.follow(floor) if isinstance(floor, Keypoints) else self.motion.track(floor, self._mask)
+            return self.motion.follow(floor)
         if isinstance(floor, Keypoints):
             raise ValueError(f"the {self.config.method} method needs camera frames, not keypoints")
         return self.motion.track(floor, stamp_ns * 1e-9)

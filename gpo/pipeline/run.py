@@ -16,6 +16,7 @@ returns what it computed when reading stops early, at Ctrl-C, or when the fusion
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 import warnings
@@ -23,12 +24,14 @@ from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
 import numpy as np
 import yaml
 from scipy.spatial.transform import Rotation
 
 from gpo.cameras.rig import Rig
-from gpo.fusion import FilterDiverged, FusionSettings, TrackingMount, fuse
+from gpo.fusion import FilterDiverged, FusionSettings, fuse
+from gpo.io.ahead import read_ahead
 from gpo.io.bag import Recording, StampWarning
 from gpo.io.outputs import write_text, write_with
 from gpo.io.trajectory import Trajectory, base_from_sensor_odometry
@@ -139,12 +142,16 @@ def _reason(flag: str) -> str:
     return flag.split(":")[0].split("(")[0].strip()
 
 
-def run(bag, config: OdometryConfig | None = None, topic: str | None = None, progress: bool = True) -> OdometryResult:
+def run(
+    bag, config: OdometryConfig | None = None, topic: str | None = None, progress: bool = True,
+    threads: int | None = None,
+) -> OdometryResult:
     """Odometry of the camera frames of ``bag`` (``topic``: default the rig's image topic when the bag has it,
-    else its only image topic). The topic, and for ``fused`` the tracking camera's odometry and mount, are checked
-    before the first frame. Returns what was computed even when reading stops early, is interrupted (Ctrl-C) or
-    the fusion fails: then ``error`` or ``interrupted`` say so (nothing is raised, so that the partial result, or
-    the floor odometry alone, can be written). Unreadable frames are skipped and flagged."""
+    else its only image topic) on ``threads`` threads (``odometry``). The topic, and for ``fused`` the tracking
+    camera's odometry and mount, are checked before the first frame. Returns what was computed even when reading
+    stops early, is interrupted (Ctrl-C) or the fusion fails: then ``error`` or ``interrupted`` say so (nothing is
+    raised, so that the partial result, or the floor odometry alone, can be written). Unreadable frames are skipped
+    and flagged."""
     config = config or load_config()
     with Recording(bag) as recording, warnings.catch_warnings():
         warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
@@ -159,7 +166,7 @@ def run(bag, config: OdometryConfig | None = None, topic: str | None = None, pro
             for frame in recording.frames(topic, gray=True, progress=progress, flag_unreadable=True)
         )
         try:
-            result = odometry(frames, config, str(bag), topic)
+            result = odometry(frames, config, str(bag), topic, threads)
         except ValueError as error:
             raise ValueError(f"{bag}, topic {topic}: {error}") from None
         if config.method == FUSED and not result.interrupted:
@@ -185,30 +192,58 @@ def _fuse_into(result: OdometryResult, tracking: Trajectory, settings: FusionSet
     result.fusion.update(refused_by_nis_gate=fused.refused, dropped=fused.dropped)
 
 
-def odometry(frames, config: OdometryConfig, source: str = "frames", topic: str = "") -> OdometryResult:
-    """Floor odometry of ``frames``: (stamp_ns, image) pairs in stamp order, each image a grey camera frame or, for
-    the ``features`` method, its ``FloorOdometer.keypoints``, so that runs differing only in the matching and the
-    filters can share one detection. For ``fused`` the floor method's odometry (``run`` adds the filter). Stops at
-    the first frame that cannot be read (an error of reading ``frames``) and says why in ``error``, and at Ctrl-C
-    (KeyboardInterrupt), keeping the frames before and marking the result ``interrupted``."""
+def odometry(
+    frames, config: OdometryConfig, source: str = "frames", topic: str = "", threads: int | None = None
+) -> OdometryResult:
+    """Floor odometry of ``frames``: (stamp_ns, image) pairs in stamp order, each image a grey camera frame or what
+    ``FloorOdometer.prepare`` makes of it (for the ``features`` method its keypoints, so that runs differing only in
+    the matching and the filters can share one detection). For ``fused`` the floor method's odometry (``run`` adds
+    the filter). Stops at the first frame that cannot be read (an error of reading ``frames``) and says why in
+    ``error``, and at Ctrl-C (KeyboardInterrupt), keeping the frames before and marking the result ``interrupted``.
+
+    ``threads``: None works in the calling thread and leaves OpenCV's threads as they are. A number sets OpenCV's
+    threads to it for the run; from 2 on, a second thread also reads and prepares the next frames while the odometer
+    tracks the current one (``gpo.io.ahead``). The records are the same whatever the threads."""
     fused = config.method == FUSED
     odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
+    if threads is not None and threads >= 2:
+        frames = read_ahead((stamp_ns, odometer.prepare(image)) for stamp_ns, image in frames)
     records: list[FrameRecord] = []
     started = time.perf_counter()
     error, interrupted = None, False
     try:
-        for stamp_ns, image in frames:
-            records.append(odometer.step(stamp_ns, image))
+        with opencv_threads(threads):
+            for stamp_ns, image in frames:
+                records.append(odometer.step(stamp_ns, image))
     except (ValueError, KeyError, OSError) as failure:
         if not records:
             raise
         error = f"after {len(records)} frames: {failure}"
     except KeyboardInterrupt:
         interrupted = True
+    finally:
+        if hasattr(frames, "close"):
+            frames.close()  # stops the reading thread
     if records and all(r.flag and r.flag.startswith("unreadable") for r in records):
         raise ValueError(f"none of the {len(records)} frames could be read; the first: {records[0].flag}")
     seconds = time.perf_counter() - started
     return OdometryResult(records, seconds, config, source, topic, error, interrupted=interrupted)
+
+
+@contextlib.contextmanager
+def opencv_threads(threads: int | None):
+    """OpenCV's threads set to ``threads`` inside the block (None: left as they are), then set back."""
+    if threads is None:
+        yield
+        return
+    if threads < 1:
+        raise ValueError(f"threads must be 1 or more, got {threads}")
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(threads)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(before)
 
 
 def tracking_path(recording: Recording, settings: FusionSettings) -> Trajectory:
@@ -241,11 +276,11 @@ def tracking_mount(recording: Recording, settings: FusionSettings) -> tuple[tupl
                 f"{{position_m: [x, y, z], rpy_deg: [roll, pitch, yaw]}} in the config (its pose frame, x forward, "
                 "y left, z up, in base_link)"
             ) from None
-        return _configured_mount(configured), "config"
+        return configured.transform, "config"
     static = (Rotation.from_quat(quaternion), np.asarray(translation, dtype=float))
     if configured is None:
         return static, None
-    rotation, position = _configured_mount(configured)
+    rotation, position = configured.transform
     moved = float(np.linalg.norm(position - static[1]))
     turned = float(np.degrees((rotation.inv() * static[0]).magnitude()))
     if moved > MOUNT_TOLERANCE[0] or turned > MOUNT_TOLERANCE[1]:
@@ -254,10 +289,6 @@ def tracking_mount(recording: Recording, settings: FusionSettings) -> tuple[tupl
             f"{settings.tracking_frame}; /tf_static's is used"
         )
     return static, None
-
-
-def _configured_mount(mount: TrackingMount) -> tuple[Rotation, np.ndarray]:
-    return Rotation.from_euler("xyz", mount.rpy_deg, degrees=True), np.array(mount.position_m)
 
 
 def _check_tracking_topic(recording: Recording, settings: FusionSettings) -> None:

@@ -24,6 +24,7 @@ from gpo.cameras import CameraModel
 from gpo.cameras.rig import CameraMount
 from gpo.floor_image.analytic import pixels_to_floor
 from gpo.floor_image.image import FloorImage
+from gpo.motion.median import median_of
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,5 +107,5 @@ def vector_motion(
     starts, vectors = measurement.start, measurement.vectors
     if tracks is not None:
         starts, vectors = starts[tracks], vectors[tracks]
-    middle = np.median if statistic == "median" else np.mean
-    return geometry.metres(np.median(starts, axis=0)), geometry.vector_metres(middle(vectors, axis=0))
+    middle = median_of if statistic == "median" else np.mean
+    return geometry.metres(median_of(starts, axis=0)), geometry.vector_metres(middle(vectors, axis=0))

@@ -23,23 +23,20 @@ The calibrated source's increments are correlated: each is the difference of two
 jitter, so consecutive increments share one pose's jitter with opposite signs, and n increments add up to the
 jitter of two poses, not of 2n. The filter keeps that correlation exactly: the jitter of the source's last pose
 (along its heading and in yaw) is a state (``JITTER``), cloned with the pose; an increment measures
-motion + new jitter - last jitter + the random walks' noise (``tracking_increment_covariance``). ``fuse`` also
-rate-matches the 200 Hz tracking camera to the floor: its poses are taken at the floor's frames (the last pose at or
-before each), so each of its increments spans a floor interval and the filter makes 30 updates a second, not 230.
+motion + new jitter - last jitter + the random walks' noise (``tracking_increment_covariance``). How the two
+sources' messages become the filter's increments, live or from a recording: ``gpo.fusion.streaming``.
 """
 
 from __future__ import annotations
 
 import math
-from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 from scipy.linalg.lapack import dpotrf
 
-from gpo.io.trajectory import Trajectory
-from gpo.odometry.kinematics import arc_increment, between
+from gpo.odometry.kinematics import arc_increment
 
 STATE = ("x", "y", "theta", "v", "omega", "scale", "yaw_bias")
 MOTION = 5  # the state's motion part: x, y, theta, v, omega
@@ -309,203 +306,3 @@ def _residual(measured: np.ndarray, expected: np.ndarray) -> np.ndarray:
     difference = measured - expected
     difference[1] = _wrap(difference[1])
     return difference
-
-
-@dataclass(frozen=True)
-class TrackingMount:
-    """The pose of the tracking camera's pose frame (REP-103: x forward, y left, z up) in base_link:
-    ``position_m`` (x, y, z metres) and ``rpy_deg`` (roll, pitch, yaw degrees, extrinsic x-y-z)."""
-
-    position_m: tuple[float, float, float]
-    rpy_deg: tuple[float, float, float]
-
-    def __post_init__(self):
-        for name in ("position_m", "rpy_deg"):
-            values = getattr(self, name)
-            if np.shape(values) != (3,) or not np.isfinite(np.asarray(values, dtype=float)).all():
-                raise ValueError(f"fusion.tracking_mount.{name} must be 3 finite numbers, got {values!r}")
-            object.__setattr__(self, name, tuple(float(v) for v in values))
-
-
-@dataclass(frozen=True)
-class FusionSettings:
-    """What ``--method fused`` fuses: the floor odometry of ``floor_method`` with a tracking camera's own odometry on
-    ``tracking_topic`` (nav_msgs/Odometry of ``tracking_frame``), mounted where the bag's /tf_static says or, without
-    it, where ``tracking_mount`` says (``TrackingMount``, or its dict).
-
-    The floor: each step's mean velocity scatters by ``floor_speed_sigma_mps`` and ``floor_turn_sigma_radps`` when
-    its flow kept ``floor_reference_inliers`` inlier vectors that spread by ``floor_reference_spread_px``: a median of
-    n vectors spread by s scatters as q = s / sqrt(n), and the variance is the reference's times (1 + (q / q_ref)^2) / 2
-    (``floor_variance_scale``; on the sample's analytic floor image the steps' scatter against the truth grows with q
-    so, 0.36 mm/s and 0.3 mrad/s at the best third of q, 1.1 mm/s and 1.4 mrad/s at the worst). A step without a
-    spread (the features method) counts as the reference.
-    The tracking camera, as its maker would specify it: random walks of position and heading
-    (``tracking_position_walk_m_per_sqrt_s``, ``tracking_yaw_walk_rad_per_sqrt_s``), white jitter on each pose
-    (``tracking_jitter_m``, ``tracking_jitter_rad``), and a scale error and yaw-rate bias that the filter estimates
-    (``BiasModel``: their prior sigmas and random walks, the ``tracking_scale_*`` and ``tracking_yaw_bias_*``
-    fields). A tracking increment over more than ``tracking_max_gap_s`` is not fused.
-    The process noise is ``ProcessNoise(accel_mps2, angular_accel_radps2)``."""
-
-    floor_method: str = "gpo-exact"
-    tracking_topic: str = "/camera/odom/sample"
-    tracking_frame: str = "camera_pose_frame"
-    tracking_mount: TrackingMount | None = None
-    floor_speed_sigma_mps: float = 0.0006
-    floor_turn_sigma_radps: float = 0.0006
-    floor_reference_inliers: int = 60
-    floor_reference_spread_px: float = 0.3
-    tracking_position_walk_m_per_sqrt_s: float = 5e-3
-    tracking_yaw_walk_rad_per_sqrt_s: float = 1e-3
-    tracking_jitter_m: float = 5e-4
-    tracking_jitter_rad: float = 5e-4
-    tracking_scale_sigma: float = BiasModel.scale_sigma
-    tracking_yaw_bias_sigma_radps: float = BiasModel.yaw_bias_sigma_radps
-    tracking_scale_walk_per_sqrt_s: float = BiasModel.scale_walk_per_sqrt_s
-    tracking_yaw_bias_walk_radps_per_sqrt_s: float = BiasModel.yaw_bias_walk_radps_per_sqrt_s
-    tracking_max_gap_s: float = 0.25
-    accel_mps2: float = ProcessNoise.accel_mps2
-    angular_accel_radps2: float = ProcessNoise.angular_accel_radps2
-
-    def __post_init__(self):
-        if isinstance(self.tracking_mount, dict):
-            unknown = sorted(set(self.tracking_mount) - {"position_m", "rpy_deg"})
-            missing = sorted({"position_m", "rpy_deg"} - set(self.tracking_mount))
-            if unknown or missing:
-                raise ValueError(
-                    f"fusion.tracking_mount needs position_m and rpy_deg, got {', '.join(sorted(self.tracking_mount))}"
-                )
-            object.__setattr__(self, "tracking_mount", TrackingMount(**self.tracking_mount))
-        for name, value in vars(self).items():
-            if isinstance(value, float) and not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"fusion.{name} must be a finite number >= 0, got {value!r}")
-
-    @property
-    def bias_model(self) -> BiasModel:
-        return BiasModel(
-            self.tracking_scale_sigma,
-            self.tracking_yaw_bias_sigma_radps,
-            self.tracking_scale_walk_per_sqrt_s,
-            self.tracking_yaw_bias_walk_radps_per_sqrt_s,
-        )
-
-    def to_dict(self) -> dict:
-        """The settings as a config file's ``fusion`` section."""
-        document = dict(vars(self))
-        mount = self.tracking_mount
-        document["tracking_mount"] = None if mount is None else {"position_m": [*mount.position_m],
-                                                                 "rpy_deg": [*mount.rpy_deg]}
-        return document
-
-
-@dataclass(frozen=True)
-class FusedPath:
-    """The EKF's ``trajectory`` of base_link (odom), the state's ``covariances`` (N, 7, 7) and the camera's estimated
-    ``biases`` (N, 2: scale, yaw bias rad/s) at its poses, how many measurements the NIS gate ``refused`` as
-    outliers, and the tracking camera's messages or steps ``dropped`` before the filter, counted by reason."""
-
-    trajectory: Trajectory
-    covariances: np.ndarray
-    biases: np.ndarray
-    refused: int
-    dropped: dict[str, int]
-
-
-def fuse(
-    floor: Trajectory, inliers: np.ndarray, tracking: Trajectory, settings: FusionSettings, spread_px=None
-) -> FusedPath:
-    """The EKF's path of base_link at the floor odometry's stamps, with its covariance and the camera's biases.
-
-    ``floor``: the floor odometry's base_link poses; ``inliers`` (N,): the flow's inlier vectors behind the step into
-    each pose, 0 where the step was not measured (coasted and held steps are not fused); ``spread_px`` (N,), when
-    known: their spread (``FusionSettings``; NaN counts as the reference). ``tracking``: the tracking camera's
-    odometry already turned into base_link poses (``gpo.io.trajectory.base_from_sensor_odometry``); only its increments
-    are used, rate-matched to the floor: its poses at the floor's frames (the last one at or before each). Poses
-    that are not finite are dropped, each source's poses are taken in the order of their stamps (a repeated stamp
-    once), a tracking step longer than ``tracking_max_gap_s`` is not fused; all counted in ``dropped``.
-    """
-    inliers = np.asarray(inliers, dtype=float)
-    if inliers.shape != (len(floor),):
-        raise ValueError(f"inliers must have one count per floor pose ({len(floor)}), got shape {inliers.shape}")
-    spread = np.full(len(floor), np.nan) if spread_px is None else np.asarray(spread_px, dtype=float)
-    if spread.shape != (len(floor),):
-        raise ValueError(f"spread_px must have one value per floor pose ({len(floor)}), got shape {spread.shape}")
-    dropped = Counter()
-    floor_times, floor_poses, kept = _ordered(floor, dropped, "floor")
-    floor_scale = floor_variance_scale(inliers[kept], spread[kept], settings)
-    floor_sigmas = settings.floor_speed_sigma_mps, settings.floor_turn_sigma_radps
-    events = [
-        ("floor", t1, increment if inliers[kept][k + 1] > 0 else None, t1 - t0,
-         increment_covariance(*floor_sigmas, t1 - t0) * floor_scale[k + 1])
-        for k, (t0, t1, increment) in enumerate(_increments(floor_times, floor_poses))
-    ]
-    tracking_times, tracking_poses, _ = _ordered(tracking, dropped, "tracking")
-    matched = np.unique(np.searchsorted(tracking_times, floor_times + 1e-9, side="right") - 1)
-    matched = matched[matched >= 0]
-    walks = (settings.tracking_position_walk_m_per_sqrt_s, settings.tracking_yaw_walk_rad_per_sqrt_s)
-    for t0, t1, increment in _increments(tracking_times[matched], tracking_poses[matched]):
-        if t1 - t0 > settings.tracking_max_gap_s:
-            dropped["tracking: step over a gap"] += 1
-            increment = None
-        events.append(("tracking", t1, increment, t1 - t0, tracking_increment_covariance(*walks, t1 - t0)))
-    events.sort(key=lambda event: event[1])
-    start = floor_times[0]
-    fusion = OdometryFusion(
-        start,
-        ProcessNoise(settings.accel_mps2, settings.angular_accel_radps2),
-        biases=settings.bias_model,
-        jitter=(settings.tracking_jitter_m, settings.tracking_jitter_rad),
-    )
-    wanted = iter(floor.times[1:])
-    states, covariances, next_time = [fusion.state], [fusion.covariance], next(wanted, None)
-    for source, time_s, increment, dt, covariance in events:
-        while next_time is not None and next_time < time_s:
-            fusion.predict(max(next_time, fusion.time_s))
-            states.append(fusion.state)
-            covariances.append(fusion.covariance)
-            next_time = next(wanted, None)
-        if time_s > start:
-            fusion.add(source, time_s, increment, dt, covariance)
-    while next_time is not None:
-        fusion.predict(max(next_time, fusion.time_s))
-        states.append(fusion.state)
-        covariances.append(fusion.covariance)
-        next_time = next(wanted, None)
-    states = np.array(states)
-    trajectory = Trajectory.from_planar(floor.stamps_ns, *states[:, :3].T, frame_id=floor.frame_id)
-    return FusedPath(trajectory, np.array(covariances), states[:, BIASES], fusion.refused, dict(dropped))
-
-
-def floor_variance_scale(inliers: np.ndarray, spread_px: np.ndarray, settings: FusionSettings) -> np.ndarray:
-    """How much each floor step's variance exceeds the reference's (``FusionSettings``): (1 + (q / q_ref)^2) / 2 with
-    q = spread / sqrt(inliers) pixels; 1 where the spread is unknown (NaN)."""
-    quality = spread_px / np.sqrt(np.maximum(inliers, 1.0))
-    reference = settings.floor_reference_spread_px / math.sqrt(settings.floor_reference_inliers)
-    return np.nan_to_num(0.5 * (1.0 + (quality / reference) ** 2), nan=1.0)
-
-
-def _ordered(path, dropped: Counter, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``path``'s stamps (s), planar poses (x, y, theta) and their indices in ``path``, finite poses only, in the order
-    of their stamps, a repeated stamp once (its first message); what was left out or reordered counted in
-    ``dropped``."""
-    times = np.asarray(path.times, dtype=float)
-    poses = np.column_stack([path.positions[:, :2], path.yaw])
-    finite = np.isfinite(poses).all(axis=1) & np.isfinite(times)
-    if not finite.all():
-        dropped[f"{source}: pose not finite"] += int((~finite).sum())
-    index = np.flatnonzero(finite)
-    if np.any(np.diff(times[index]) < 0):
-        dropped[f"{source}: stamp out of order (reordered)"] += int(np.sum(np.diff(times[index]) < 0))
-    index = index[np.argsort(times[index], kind="stable")]
-    repeated = np.r_[False, np.diff(times[index]) == 0]
-    if repeated.any():
-        dropped[f"{source}: stamp repeated"] += int(repeated.sum())
-    index = index[~repeated]
-    if len(index) < 2:
-        raise ValueError(f"the {source} path needs at least two poses with finite values and distinct stamps")
-    return times[index], poses[index], index
-
-
-def _increments(times: np.ndarray, poses: np.ndarray):
-    """(start s, end s, base_link increment) of each step between consecutive ``poses`` at ``times``."""
-    increments = between(poses[:-1], poses[1:])
-    return zip(times[:-1], times[1:], increments, strict=True)
