@@ -19,6 +19,7 @@ import cv2
 import yaml
 from distributed import get_worker
 
+from gpo.io import cache
 from gpo.io.bag import Recording
 from gpo.io.fingerprint import PACKAGE_ROOT, sources
 from gpo.io.trajectory import Trajectory
@@ -119,9 +120,9 @@ def recording_digest(path: str) -> str:
 
 
 def run_key(recording_sha256: str, config: dict, version: str) -> str:
-    """The key of a run: a hash of its recording's content, its whole config document and the code version."""
-    text = json.dumps([recording_sha256, config, version], sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    """The key of a run (``gpo.io.cache.key``): its recording's content, its whole config document and the code
+    version."""
+    return cache.key(recording_sha256, config, version)
 
 
 @dataclass

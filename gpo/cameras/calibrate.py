@@ -86,7 +86,14 @@ from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
 from gpo.cameras import MODELS as MODEL_CLASSES
-from gpo.cameras.chessboard import check_pattern_size, find_corners, forms_grid, pattern_text, smaller_pattern_hint
+from gpo.cameras.chessboard import (
+    check_pattern_size,
+    find_corners,
+    forms_grid,
+    pattern_text,
+    planar_pose,
+    smaller_pattern_hint,
+)
 from gpo.cameras.eucm import EUCM
 from gpo.cameras.files import Camera
 from gpo.cameras.fit import fit_model, parameter_bounds
@@ -320,30 +327,12 @@ def initial_eucm(width: int, height: int, focal: float | None = None) -> EUCM:
 
 
 def board_pose(camera: Camera, board: Chessboard, corners: np.ndarray):
-    """Board pose (rotation camera <- board, position in metres) from its corners' pixels (N, 2), or None.
-
-    The corners are unprojected to rays and turned into a virtual pinhole camera looking at their
-    mean, where ``cv2.solvePnP`` (IPPE, for planar targets) solves the pose on normalised points.
-    """
+    """Board pose (rotation camera <- board, position in metres) from its corners' pixels (N, 2), or None: the
+    corners unprojected to rays, posed by ``gpo.cameras.chessboard.planar_pose``."""
     rays, valid = camera.unproject(corners)
     if valid.sum() < 4:
         return None
-    axis = rays[valid].mean(axis=0)
-    turn, _ = Rotation.align_vectors(axis / np.linalg.norm(axis), [0.0, 0.0, 1.0])  # camera <- virtual
-    local = turn.inv().apply(rays[valid])
-    ahead = local[:, 2] > 0.05
-    if ahead.sum() < 4:
-        return None
-    found, rotvec, position = cv2.solvePnP(
-        board.inner_corners()[valid][ahead],
-        local[ahead, :2] / local[ahead, 2:],
-        np.eye(3),
-        None,
-        flags=cv2.SOLVEPNP_IPPE,
-    )
-    if not found:
-        return None
-    return turn * Rotation.from_rotvec(rotvec.ravel()), turn.apply(position.ravel())
+    return planar_pose(rays[valid], board.inner_corners()[valid])
 
 
 def _view_rms(camera, board: Chessboard, pose, corners: np.ndarray) -> float:

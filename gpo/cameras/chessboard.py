@@ -165,6 +165,27 @@ def view_rotation(axis) -> Rotation:
     return Rotation.from_matrix(np.column_stack([x, np.cross(z, x), z]))
 
 
+def planar_pose(rays: np.ndarray, points: np.ndarray) -> tuple[Rotation, np.ndarray] | None:
+    """camera <- board from unit rays (N, 3) to the board's ``points`` (N, 3, metres, on its plane z = 0), or None.
+
+    The rays are turned into a virtual pinhole camera looking along their mean (``view_rotation``), where
+    ``cv2.solvePnP`` (IPPE, for planar targets) solves the pose on normalised points: any camera model's rays, a
+    fisheye's beyond 90 degrees included. Rays more than 87 degrees off the mean are left out; None when fewer than
+    four are left or no pose fits. A start for a fit of the reprojection error, not the fit itself."""
+    view = view_rotation(rays.mean(axis=0))
+    in_view = view.inv().apply(rays)
+    ahead = in_view[:, 2] > 0.05
+    if ahead.sum() < 4:
+        return None
+    found, rotvec, position = cv2.solvePnP(
+        np.ascontiguousarray(points[ahead]), in_view[ahead, :2] / in_view[ahead, 2:], np.eye(3), None,
+        flags=cv2.SOLVEPNP_IPPE,
+    )
+    if not found:
+        return None
+    return view * Rotation.from_rotvec(rotvec.ravel()), view.apply(position.ravel())
+
+
 def forms_grid(corners: np.ndarray, pattern_size: tuple[int, int]) -> bool:
     """Do the corners (N, 2) pixels form the board's grid, in order? Along every row and column, the second difference
     of neighbouring corners must stay within ``GRID_TOLERANCE`` times the shorter of its two steps (a fisheye's

@@ -46,9 +46,8 @@ model; ``detect_corners`` raises ``MountError`` where it finds no board.
 Solving the pose
 ----------------
 The corners are unprojected to unit rays by the calibrated camera model (EUCM or pinhole alike).
-The rays are turned into a virtual pinhole camera looking along their mean direction, where
-they are all in front, and ``cv2.solvePnP`` (IPPE, the planar method) gives the initial pose from
-the rays' normalised coordinates. ``scipy.optimize.least_squares`` then refines the pose on the
+``gpo.cameras.chessboard.planar_pose`` (IPPE in a virtual pinhole camera looking along the rays' mean, the same
+start the calibration's fit takes) gives the initial pose. ``scipy.optimize.least_squares`` then refines the pose on the
 reprojection error in pixels, through the camera model's ``project``. The one-sigma
 uncertainties reported follow from the fit: the residuals' variance times ``(J^T J)^-1`` for the
 pose, carried to height, angles and position by the numbers' central-difference Jacobian.
@@ -78,7 +77,7 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from gpo.cameras.base import CameraModel
-from gpo.cameras.chessboard import MOUNT, find_corners, view_rotation
+from gpo.cameras.chessboard import MOUNT, find_corners, planar_pose
 from gpo.cameras.files import Camera
 from gpo.cameras.rig import CameraMount
 from gpo.cameras.targets import Chessboard, FloorBoard
@@ -231,11 +230,12 @@ def floor_angles(normal, kind: str = "forward") -> tuple[float, float]:
     return float(np.arctan2(-m[0], np.hypot(m[1], m[2]))), float(np.arctan2(m[1], m[2]))
 
 
-def detect_corners(image: np.ndarray, camera: CameraModel, board: Chessboard, rectify: bool | None = None):
+def detect_corners(image: np.ndarray, camera: CameraModel | None, board: Chessboard, rectify: bool | None = None):
     """The board's inner corners (N, 2) pixels in ``image`` (8-bit, of the camera's size), in the board's order.
 
     ``gpo.cameras.chessboard.find_corners`` with its ``MOUNT`` search; ``rectify`` as there: None on the image, then
-    in perspective views rendered from the camera model; True in those views only; False on the image only. Raises
+    in perspective views rendered from the camera model; True in those views only; False on the image only. A
+    ``camera`` of None (an image no camera model describes, such as a floor image) searches the image only. Raises
     ``MountError`` when the board is found nowhere.
     """
     corners = find_corners(image, board.pattern_size, camera, MOUNT, rectify)
@@ -311,16 +311,11 @@ def _choose_order(rays, board: Chessboard, kind: str, yaw_board: float, expected
 
 
 def _initial_pose(rays: np.ndarray, board: Chessboard) -> tuple[Rotation, np.ndarray]:
-    """camera <- board from unit rays (N, 3) by IPPE in a virtual pinhole looking along their mean."""
-    view = view_rotation(rays.mean(axis=0))
-    in_view = view.inv().apply(rays)
-    if (in_view[:, 2] <= 0).any():
-        raise MountError("the corners' rays span more than a hemisphere: no planar board fits them")
-    normalised = in_view[:, :2] / in_view[:, 2:]
-    ok, rvec, tvec = cv2.solvePnP(board.inner_corners(), normalised, np.eye(3), None, flags=cv2.SOLVEPNP_IPPE)
-    if not ok:
-        raise MountError("no initial pose of the board fits the corners")
-    return view * Rotation.from_rotvec(rvec.ravel()), view.apply(tvec.ravel())
+    """camera <- board from unit rays (N, 3) (``gpo.cameras.chessboard.planar_pose``)."""
+    pose = planar_pose(rays, board.inner_corners())
+    if pose is None:
+        raise MountError("no initial pose of the board fits the corners (their rays span more than a hemisphere?)")
+    return pose
 
 
 def _perturbed(pose: tuple[Rotation, np.ndarray], delta: np.ndarray) -> tuple[Rotation, np.ndarray]:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from gpo.cameras import CameraModel, Pinhole
+from gpo.cameras import CameraModel
 from gpo.cameras.mount import MountError, detect_corners
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.floor_image.gpi import GroundPlaneImage, apply_homography, fit_homography, ground_plane_image
@@ -152,10 +152,8 @@ def board_corners(image: np.ndarray, floor: FloorImage, placement: FloorBoard) -
             f"the floor image is {width} x {height} pixels but its description is {floor.width} x {floor.height}"
         )
     board = placement.board
-    # detect_corners checks an image against a camera's size; a floor image has none, so a stand-in of its size
-    frame = Pinhole(1.0, 1.0, 0.0, 0.0, (0.0, 0.0, 0.0, 0.0), width, height)
     try:
-        found = detect_corners(image, frame, board, rectify=False)
+        found = detect_corners(image, None, board, rectify=False)  # a floor image: no camera model, no views
     except MountError as error:
         raise GroundImageError(
             f"{error}: the whole board, with its white margin, must lie inside the floor image; choose a larger "
