@@ -284,9 +284,13 @@ def test_run_refuses_what_is_not_a_bag_before_anything(world, tmp_path, capsys, 
 
 @pytest.mark.parametrize("method", ["gpo", "gpo-exact", "gpo-rigid", "features", "fused"])
 def test_every_method_runs_on_the_tiny_bag(world, tmp_path, capsys, method):
+    """The keypoint method finds too few keypoints on the tiny bag's noise floor to measure most of its frames: its
+    run is written (no file was there) and flagged, exit 1."""
     out = tmp_path / "traj.tum"
+    words = ["flagged: measured", "of 11 steps"] if method == "features" else []
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out,
-                                            "--method", method], 0, f"wrote {out}")
+                                            "--method", method], 1 if method == "features" else 0, f"wrote {out}",
+          *words)
     assert len(Trajectory.read_tum(out)) == 12 and summary(out)["method"] == method
 
 
@@ -424,10 +428,23 @@ def test_an_unreadable_frame_is_skipped_and_flagged_and_the_run_goes_on(world, t
     ],
 )
 def test_frames_that_cannot_be_measured_are_flagged(world, tmp_path, capsys, name, flag):
+    """Each such frame is flagged with its reason; a run that measured none of its steps is a flagged result."""
     out = tmp_path / "t.tum"
-    check(capsys, [world.root, tmp_path], ["run", world.bag(name), "--config", world.config, "--out", out], 0,
-          f": {flag}")
+    nothing = name in ("textureless", "black")
+    words = ["flagged: measured 0 of 11 steps"] if nothing else []
+    check(capsys, [world.root, tmp_path], ["run", world.bag(name), "--config", world.config, "--out", out],
+          1 if nothing else 0, f": {flag}", *words)
     assert flag in summary(out)["flags"]
+    assert ("flagged" in summary(out)) == nothing
+
+
+def test_a_run_that_measured_nothing_never_replaces_a_good_trajectory(world, tmp_path, capsys):
+    out = tmp_path / "good.tum"
+    out.write_text("# a good trajectory\n")
+    check(capsys, [world.root, tmp_path], ["run", world.bag("black"), "--config", world.config, "--out", out], 1,
+          "measured 0 of 11 steps", f"{out} is kept", "--force")
+    assert out.read_text() == "# a good trajectory\n"
+    assert summary(tmp_path / "good.flagged.tum")["flagged"] == "measured 0 of 11 steps between frames"
 
 
 @pytest.mark.parametrize(

@@ -19,9 +19,9 @@ python -m gpo sweep-report DIR    PNG plots of a sweep's errors against each par
 
 Every command checks its inputs and output paths before it works, never writes onto one of its inputs, and
 writes each file to a temporary name and then renames it; a result it flags (an unreliable calibration, a run
-stopped early or interrupted) does not replace a file already there but goes beside it (``NAME.flagged.EXT``),
-unless ``--force``. A command module imports what only it needs (the simulator, matplotlib, Dask) inside its
-``run``, so that every command starts quickly.
+stopped early, interrupted, or that measured fewer than half its frames) does not replace a file already there but
+goes beside it (``NAME.flagged.EXT``), unless ``--force``. A command module imports what only it needs (the
+simulator, matplotlib, Dask) inside its ``run``, so that every command starts quickly.
 """
 
 from __future__ import annotations

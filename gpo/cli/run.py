@@ -50,6 +50,8 @@ def print_run(result: OdometryResult) -> None:
             f"  {summary['frames_slower_layer']} measured frames held a slower layer of vectors (reflections on a "
             "glossy floor?): their median is short"
         )
+    if result.shortfall:
+        print(f"flagged: {result.shortfall}; the trajectory is mostly coasted or held, not measured", file=sys.stderr)
     if result.interrupted:
         print(f"interrupted after {len(result.records)} frames; the frames before were kept", file=sys.stderr)
     elif result.error and result.error.startswith("after"):
@@ -93,7 +95,7 @@ def run(args) -> int:
         print(f"{args.write_bag} not written: the result is flagged", file=sys.stderr)
     if result.interrupted:
         return INTERRUPTED
-    return 1 if result.error else 0
+    return 1 if result.flagged else 0
 
 
 def _bytes(path: Path) -> int:

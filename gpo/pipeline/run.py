@@ -52,6 +52,9 @@ class FloorRun:
     spread_px: np.ndarray | None = None
 
 
+MEASURED_SHARE = 0.5  # a run that measured fewer than this share of its steps is a flagged result
+
+
 @dataclass
 class OdometryResult:
     """A run's frames and timing: ``records`` (one per frame read), ``seconds`` of wall time, the ``config``,
@@ -70,8 +73,19 @@ class OdometryResult:
 
     @property
     def flagged(self) -> bool:
-        """Whether the result is short of what was asked: stopped early, interrupted, or not fused."""
-        return self.error is not None or self.interrupted
+        """Whether the result is short of what was asked: stopped early, interrupted, not fused, or mostly not
+        measured (``shortfall``)."""
+        return self.error is not None or self.interrupted or self.shortfall is not None
+
+    @property
+    def shortfall(self) -> str | None:
+        """Why a run that read every frame is still a flagged result: it measured fewer than ``MEASURED_SHARE`` of
+        its steps (the rest coasted, held or skipped: no texture, a black floor, the wrong topic), or None."""
+        steps = len(self.records) - 1
+        measured = sum(r.status is Status.MEASURED for r in self.records)
+        if steps > 0 and measured < MEASURED_SHARE * steps:
+            return f"measured {measured} of {steps} steps between frames"
+        return None
 
     @property
     def trajectory(self) -> Trajectory:
@@ -119,6 +133,7 @@ class OdometryResult:
             "duration_s": round(float(np.ptp(trajectory.times)), 3) if len(trajectory) else 0.0,
             "frames_per_second": round(self.frames_per_second, 1),
             "stopped_early": self.error,
+            **({"flagged": self.shortfall} if self.shortfall else {}),
             **({"unreadable": unreadable} if unreadable else {}),
             **({"interrupted": True} if self.interrupted else {}),
             **({"fusion": self.fusion} if self.fusion is not None else {}),
