@@ -8,7 +8,7 @@ import pytest
 
 from gpo.experiments import runs
 from gpo.experiments.runs import floor_run, route_config
-from gpo.experiments.table4 import ROWS, Row, format_fusion_accuracy, reproduce_table4
+from gpo.experiments.table4 import PAPER_TABLE4, ROWS, Row, format_fusion_accuracy, reproduce_table4
 from gpo.fusion import fuse
 from gpo.io import cache
 from gpo.io.bag import Recording
@@ -167,3 +167,15 @@ def test_the_fusion_accuracy_text_gives_each_presets_median_and_worst_and_the_ou
     assert lines[-1] == "with floor outages, fused at most 0.400 % (target 0.3 %: met in 1 of 2 runs)"
     outages_only = format_fusion_accuracy({"runs": runs, "summary": summary}, outages_only=True)
     assert "long1 " not in outages_only and "1.1 x" not in outages_only
+
+
+def test_the_papers_table4_is_every_row_and_test_it_prints():
+    """Five rows (its T265 row serves both images) by three tests; each printed average within a ten-thousandth of its
+    tests' mean; the same layout as the suite's table, the tests' lengths in the header."""
+    errors = PAPER_TABLE4.translation_errors_m()
+    assert errors.shape == (len(PAPER_TABLE4.rows), len(PAPER_TABLE4.paths)) == (5, 3)
+    np.testing.assert_allclose(errors.mean(axis=1), PAPER_TABLE4.printed_means_m, rtol=0, atol=1e-4)
+    header, *lines = PAPER_TABLE4.format().splitlines()
+    assert "Test4 (12.8 m)" in header and "Test6 (17.0 m)" in header
+    assert [line[:38].strip() for line in lines] == [row.label for row in PAPER_TABLE4.rows]
+    assert "0.1195 ( 0.81 %)" in lines[1]  # GPO on the GPI: the printed average, the mean of its tests' per cent
