@@ -27,3 +27,16 @@ def test_the_truth_against_itself_is_zero():
 def test_a_path_shorter_than_a_segment_is_an_error():
     with pytest.raises(ValueError, match=r"1\.0 m"):
         relative_translation_errors(straight(seconds=0.5), straight(seconds=0.5))
+
+
+def test_the_papers_table3_is_every_row_and_test_it_prints():
+    """Two vectors by three statistics by three tests; each printed average within a ten-thousandth of its tests' mean;
+    the layout of the suite's table."""
+    from gpo.experiments.table3 import PAPER_TABLE3, TABLE3_VECTORS
+
+    for (vector, statistic), values in PAPER_TABLE3.values.items():
+        assert vector in TABLE3_VECTORS and statistic in ("min", "max", "avg") and len(values) == 4
+        assert abs(np.mean(values[:3]) - values[3]) <= 1e-4 + 1e-12
+    assert PAPER_TABLE3.average("median") / PAPER_TABLE3.average("mean") == pytest.approx(0.0329 / 0.0732)
+    lines = PAPER_TABLE3.format().splitlines()
+    assert "Test1 (3.88)" in lines[1] and len(lines) == 2 + 6
