@@ -37,10 +37,11 @@ heading     the yaw (heading of base_link's x axis in the floor plane, ``atan2(R
 
 The papers' numbers
 -------------------
-First paper (Ground Plane Odometry), Tables 3 and 4, "translation error": the final position error in metres after
-placing the estimate's first pose on the truth's (``translation_error``, the ``position_m`` of ``final_error``).
-Its Table 3 lists, per test, the minimum, maximum and average of the "relative translation error"
-(``relative_translation_errors``: evo's RPE, translation part, over all pose pairs 1 m of travel apart).
+First paper (Ground Plane Odometry), Table 4, "translation error": the final position error in metres after placing
+the estimate's first pose on the truth's (``translation_error``, the ``position_m`` of ``final_error``). Its Table 3
+lists, per test, the minimum, maximum and average of the "relative translation error" (so its text; its caption says
+"translation errors"): ``relative_translation_errors``, evo's RPE, translation part, over all pose pairs 1 m of travel
+apart.
 
 Second paper (floor feature odometer), Table 2, after aligning the first pose (``table2_metrics``): positioning
 RMSE (APE RMSE, metres), heading RMSE (degrees), final error in mm and in % of the distance travelled, and relative
@@ -258,8 +259,8 @@ def translation_error(
     truth: Trajectory | PoseTrajectory3D,
     max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
 ) -> float:
-    """The first paper's "translation error" (its Tables 3 and 4): the final position error in metres, in the floor
-    plane, after placing the estimate's first pose on the truth's."""
+    """The first paper's "translation error" (its Table 4): the final position error in metres, in the floor plane,
+    after placing the estimate's first pose on the truth's. (Its Table 3's is ``relative_translation_errors``.)"""
     return final_error(estimate, truth, max_difference_s).position_m
 
 
