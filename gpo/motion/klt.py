@@ -97,28 +97,40 @@ class KLTParameters:
     normalise_brightness: bool = True
 
     def __post_init__(self):
-        checks = {
-            "max_corners": self.max_corners >= 1,
-            "quality_level": 0 < self.quality_level < 1,
-            "min_distance_px": self.min_distance_px >= 0,
-            "block_size": self.block_size >= 3,
-            "window_px": self.window_px >= 5 and self.window_px % 2 == 1,
-            "pyramid_levels": 0 <= self.pyramid_levels <= 8,
-            "max_iterations": self.max_iterations >= 1,
-            "epsilon_px": self.epsilon_px > 0,
-            "forward_backward_px": self.forward_backward_px > 0,
-            "redetect_below": self.redetect_below >= 0,
-            "min_tracks": self.min_tracks >= 2,
-            "min_kept_ratio": 0 <= self.min_kept_ratio <= 1,
-            "min_texture_grey": self.min_texture_grey >= 0,
-            "inlier_px": self.inlier_px > 0,
-            "min_inlier_ratio": 0 <= self.min_inlier_ratio <= 1,
-            "flat_field_px": self.flat_field_px == 0 or self.flat_field_px >= 3,
-        }
-        bad = [name for name, ok in checks.items() if not ok]
+        ranges = self._ranges()
+        bad = [f"{name}={getattr(self, name)!r} ({allowed})" for name, (ok, allowed) in ranges.items() if not ok]
         if bad:
-            values = ", ".join(f"{name}={getattr(self, name)!r}" for name in bad)
-            raise ValueError(f"bad KLT parameters: {values} (see KLTParameters for the allowed ranges)")
+            raise ValueError(f"bad KLT parameters: {'; '.join(bad)}")
+
+    def _ranges(self) -> dict[str, tuple[bool, str]]:
+        """Each parameter: whether its value lies in the range a real rig can use, and that range with its unit."""
+        def within(name, low, high, unit, whole=False, low_open=False):
+            value = getattr(self, name)
+            above = low < value if low_open else low <= value
+            ok = bool(above and value <= high and (float(value).is_integer() or not whole))
+            kind = "a whole number " if whole else ""
+            return ok, f"{kind}{'over' if low_open else 'from'} {low} to {high}{unit}"
+
+        return {
+            "max_corners": within("max_corners", 1, 10_000, " corners", whole=True),
+            "quality_level": (0 < self.quality_level < 1, "between 0 and 1, a share of the best corner's score"),
+            "min_distance_px": within("min_distance_px", 0, 1000, " px"),
+            "block_size": within("block_size", 3, 63, " px", whole=True),
+            "window_px": (within("window_px", 5, 101, " px", whole=True)[0] and self.window_px % 2 == 1,
+                          "an odd whole number from 5 to 101 px"),
+            "pyramid_levels": within("pyramid_levels", 0, 8, " levels", whole=True),
+            "max_iterations": within("max_iterations", 1, 1000, " iterations", whole=True),
+            "epsilon_px": within("epsilon_px", 0, 10, " px", low_open=True),
+            "forward_backward_px": within("forward_backward_px", 0, 100, " px", low_open=True),
+            "redetect_below": within("redetect_below", 0, 10_000, " tracks", whole=True),
+            "min_tracks": within("min_tracks", 2, 10_000, " tracks", whole=True),
+            "min_kept_ratio": within("min_kept_ratio", 0, 1, ", a share of the tracks followed"),
+            "inlier_px": within("inlier_px", 0, 100, " px", low_open=True),
+            "min_inlier_ratio": within("min_inlier_ratio", 0, 1, ", a share of the kept vectors"),
+            "min_texture_grey": within("min_texture_grey", 0, 255, " grey levels"),
+            "flat_field_px": (self.flat_field_px == 0 or within("flat_field_px", 3, 1001, " px", whole=True)[0],
+                              "0 (none) or a whole number from 3 to 1001 px"),
+        }
 
     @property
     def reach_px(self) -> float:
