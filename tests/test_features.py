@@ -418,11 +418,17 @@ def test_bad_images_are_refused_clearly():
         ("min_matches", 1),
         ("refit_px", -1.0),
         ("seed", -1),
+        ("max_features", 10**9),  # beyond what a real rig can use: refused with the range and its unit
+        ("fast_threshold", 256),
+        ("orientation_bins", 100_000),
+        ("refit_px", 1e30),
     ],
 )
 def test_bad_parameters_name_the_field(field, value):
-    with pytest.raises(FeatureError, match=f"^{field} must be"):
+    with pytest.raises(FeatureError, match=f"^{field} must be") as raised:
         dataclasses.replace(FeatureParameters(), **{field: value})
+    if field in ("max_features", "fast_threshold", "orientation_bins") and value > 100:
+        assert " to " in str(raised.value)  # the range
 
 
 # ------------------------------------------------------------ the paper's printed formulas, computed here by hand

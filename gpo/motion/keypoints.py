@@ -44,6 +44,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from gpo.motion.ranges import in_range
+
 DETECTORS = ("orb", "sift")
 
 
@@ -133,23 +135,23 @@ class FeatureParameters:
         flags = ("cross_check", "histogram_filter", "invariance_check")
         return {
             "detector": (self.detector in DETECTORS, f"one of {', '.join(map(repr, DETECTORS))}"),
-            "max_features": (_whole(self.max_features, 1), "a whole number >= 1"),
-            "contrast_threshold": (_real(self.contrast_threshold) and self.contrast_threshold > 0, "a number > 0"),
-            "fast_threshold": (_whole(self.fast_threshold, 1), "a whole number >= 1"),
+            "max_features": in_range(self.max_features, 1, 100_000, " keypoints", whole=True),
+            "contrast_threshold": in_range(self.contrast_threshold, 0, 1, " (SIFT's)", low_open=True),
+            "fast_threshold": in_range(self.fast_threshold, 1, 255, " grey levels (ORB's FAST)", whole=True),
             "scale": (_real(self.scale) and 0 < self.scale <= 1, "a number in (0, 1]"),
             "roi": (roi_ok, f"None or (u, v, width, height), whole pixels, width and height >= {MIN_ROI_PX}"),
             "ratio": (_real(self.ratio) and 0 < self.ratio <= 1, "a number in (0, 1] (1: no ratio test)"),
             **{name: (isinstance(getattr(self, name), bool), "True or False") for name in flags},
-            "orientation_bins": (_whole(self.orientation_bins, 1), "a whole number >= 1"),
-            "length_bins": (_whole(self.length_bins, 1), "a whole number >= 1"),
+            "orientation_bins": in_range(self.orientation_bins, 1, 3600, " bins", whole=True),
+            "length_bins": in_range(self.length_bins, 1, 10_000, " bins", whole=True),
             "invariance_threshold": (
                 _real(self.invariance_threshold) and 0 < self.invariance_threshold <= 1,
                 "a number in (0, 1]",
             ),
             "cardinality": (self.cardinality is None or _whole(self.cardinality, 3), "None or a whole number >= 3"),
-            "rounds": (_whole(self.rounds, 1), "a whole number >= 1"),
-            "min_matches": (_whole(self.min_matches, 2), "a whole number >= 2"),
-            "refit_px": (_real(self.refit_px) and self.refit_px >= 0, "a number >= 0 (0: no refit)"),
+            "rounds": in_range(self.rounds, 1, 100_000, " loops", whole=True),
+            "min_matches": in_range(self.min_matches, 2, 100_000, " matches", whole=True),
+            "refit_px": in_range(self.refit_px, 0, 100, " px (0: no refit)"),
             "seed": (_whole(self.seed, 0), "a whole number >= 0"),
         }
 

@@ -37,6 +37,7 @@ import numpy as np
 
 from gpo.motion.layers import slower_count, slower_layer
 from gpo.motion.median import median_of
+from gpo.motion.ranges import in_range
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
 
@@ -104,32 +105,25 @@ class KLTParameters:
 
     def _ranges(self) -> dict[str, tuple[bool, str]]:
         """Each parameter: whether its value lies in the range a real rig can use, and that range with its unit."""
-        def within(name, low, high, unit, whole=False, low_open=False):
-            value = getattr(self, name)
-            above = low < value if low_open else low <= value
-            ok = bool(above and value <= high and (float(value).is_integer() or not whole))
-            kind = "a whole number " if whole else ""
-            return ok, f"{kind}{'over' if low_open else 'from'} {low} to {high}{unit}"
-
+        window_ok, _ = in_range(self.window_px, 5, 101, whole=True)
+        flat_ok, _ = in_range(self.flat_field_px, 3, 1001, whole=True)
         return {
-            "max_corners": within("max_corners", 1, 10_000, " corners", whole=True),
-            "quality_level": (0 < self.quality_level < 1, "between 0 and 1, a share of the best corner's score"),
-            "min_distance_px": within("min_distance_px", 0, 1000, " px"),
-            "block_size": within("block_size", 3, 63, " px", whole=True),
-            "window_px": (within("window_px", 5, 101, " px", whole=True)[0] and self.window_px % 2 == 1,
-                          "an odd whole number from 5 to 101 px"),
-            "pyramid_levels": within("pyramid_levels", 0, 8, " levels", whole=True),
-            "max_iterations": within("max_iterations", 1, 1000, " iterations", whole=True),
-            "epsilon_px": within("epsilon_px", 0, 10, " px", low_open=True),
-            "forward_backward_px": within("forward_backward_px", 0, 100, " px", low_open=True),
-            "redetect_below": within("redetect_below", 0, 10_000, " tracks", whole=True),
-            "min_tracks": within("min_tracks", 2, 10_000, " tracks", whole=True),
-            "min_kept_ratio": within("min_kept_ratio", 0, 1, ", a share of the tracks followed"),
-            "inlier_px": within("inlier_px", 0, 100, " px", low_open=True),
-            "min_inlier_ratio": within("min_inlier_ratio", 0, 1, ", a share of the kept vectors"),
-            "min_texture_grey": within("min_texture_grey", 0, 255, " grey levels"),
-            "flat_field_px": (self.flat_field_px == 0 or within("flat_field_px", 3, 1001, " px", whole=True)[0],
-                              "0 (none) or a whole number from 3 to 1001 px"),
+            "max_corners": in_range(self.max_corners, 1, 10_000, " corners", whole=True),
+            "quality_level": in_range(self.quality_level, 0, 1, ", a share of the best corner's score", low_open=True),
+            "min_distance_px": in_range(self.min_distance_px, 0, 1000, " px"),
+            "block_size": in_range(self.block_size, 3, 63, " px", whole=True),
+            "window_px": (window_ok and self.window_px % 2 == 1, "an odd whole number from 5 to 101 px"),
+            "pyramid_levels": in_range(self.pyramid_levels, 0, 8, " levels", whole=True),
+            "max_iterations": in_range(self.max_iterations, 1, 1000, " iterations", whole=True),
+            "epsilon_px": in_range(self.epsilon_px, 0, 10, " px", low_open=True),
+            "forward_backward_px": in_range(self.forward_backward_px, 0, 100, " px", low_open=True),
+            "redetect_below": in_range(self.redetect_below, 0, 10_000, " tracks", whole=True),
+            "min_tracks": in_range(self.min_tracks, 2, 10_000, " tracks", whole=True),
+            "min_kept_ratio": in_range(self.min_kept_ratio, 0, 1, ", a share of the tracks followed"),
+            "inlier_px": in_range(self.inlier_px, 0, 100, " px", low_open=True),
+            "min_inlier_ratio": in_range(self.min_inlier_ratio, 0, 1, ", a share of the kept vectors"),
+            "min_texture_grey": in_range(self.min_texture_grey, 0, 255, " grey levels"),
+            "flat_field_px": (self.flat_field_px == 0 or flat_ok, "0 (none) or a whole number from 3 to 1001 px"),
         }
 
     @property
