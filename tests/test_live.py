@@ -85,12 +85,15 @@ def test_the_streaming_filter_refuses_floor_poses_back_in_time_and_counts_bad_tr
     fusion.add_floor(1.0, (0.0, 0.0, 0.0), 0)
     with pytest.raises(ValueError, match="time order"):
         fusion.add_floor(1.0, (0.0, 0.0, 0.0), 0)
+    fusion.add_floor(1.2, (np.nan, 0.0, 0.0), 0)  # dropped, but its time still counts
+    with pytest.raises(ValueError, match="time order"):
+        fusion.add_floor(1.1, (0.0, 0.0, 0.0), 0)
     fusion.add_tracking(1.0, (0.0, 0.0, 0.0))
     fusion.add_tracking(0.9, (0.0, 0.0, 0.0))
     fusion.add_tracking(1.0, (0.0, 0.0, 0.0))
     fusion.add_tracking(1.1, (np.nan, 0.0, 0.0))
     assert fusion.dropped == {"tracking: stamp out of order (dropped)": 1, "tracking: stamp repeated": 1,
-                              "tracking: pose not finite": 1}
+                              "tracking: pose not finite": 1, "floor: pose not finite": 1}
 
 
 def test_fuse_is_the_streaming_filter_fed_a_recording(bag):

@@ -84,6 +84,7 @@ class StreamingFusion:
         self._events: list = []  # increments waiting to be fused, a heap by end time, the floor's first at a tie
         self._order = itertools.count()
         self._start_s = math.inf  # the first finite floor pose's time, where the filter starts
+        self._last_floor_s = -math.inf  # the last floor pose's time, finite or not
 
     @property
     def refused(self) -> int:
@@ -94,9 +95,9 @@ class StreamingFusion:
         """The floor odometry's pose (x, y, theta of base_link in odom) at ``time_s`` (its header stamp in seconds),
         after a step that ``inliers`` inlier vectors spread by ``spread_px`` pixels measured (0: not measured, the
         step not fused; a spread of NaN counts as the reference). Times must increase."""
-        last = self._frames[-1].time_s if self._frames else self._floor[0] if self._floor else -math.inf
-        if not time_s > last:
-            raise ValueError(f"floor poses must come in time order: {time_s:.9f} s after {last:.9f} s")
+        if not time_s > self._last_floor_s:
+            raise ValueError(f"floor poses must come in time order: {time_s:.9f} s after {self._last_floor_s:.9f} s")
+        self._last_floor_s = time_s
         pose = np.asarray(pose, dtype=float)
         finite = bool(np.isfinite(pose).all())
         events = []
@@ -225,13 +226,13 @@ def fuse(
     if spread.shape != (len(floor),):
         raise ValueError(f"spread_px must have one value per floor pose ({len(floor)}), got shape {spread.shape}")
     dropped = Counter()
-    floor_order = _ordered(floor, dropped, "floor")
-    tracking_order = _ordered(tracking, dropped, "tracking")
-    fusion = StreamingFusion(settings)
+    floor_times, floor_poses = np.asarray(floor.times, dtype=float), planar(floor)
     tracking_times, tracking_poses = np.asarray(tracking.times, dtype=float), planar(tracking)
+    floor_order = _ordered(floor_times, floor_poses, dropped, "floor")
+    tracking_order = _ordered(tracking_times, tracking_poses, dropped, "tracking")
+    fusion = StreamingFusion(settings)
     for k in tracking_order:
         fusion.add_tracking(float(tracking_times[k]), tracking_poses[k])
-    floor_times, floor_poses = floor.times, planar(floor)
     settled = [pose for k in floor_order for pose in fusion.add_floor(floor_times[k], floor_poses[k], inliers[k],
                                                                        spread[k])]
     settled += fusion.finish()  # one pose for each floor pose fed, in order
@@ -246,10 +247,9 @@ def planar(path) -> np.ndarray:
     return np.column_stack([path.positions[:, :2], path.yaw])
 
 
-def _ordered(path: Trajectory, dropped: Counter, source: str) -> np.ndarray:
-    """The indices of ``path``'s finite poses in the order of their stamps, a repeated stamp once (its first message);
-    what was left out or reordered counted in ``dropped``. At least two such poses."""
-    times, poses = np.asarray(path.times, dtype=float), planar(path)
+def _ordered(times: np.ndarray, poses: np.ndarray, dropped: Counter, source: str) -> np.ndarray:
+    """The indices of a path's finite poses (``times`` s, planar ``poses``) in the order of their stamps, a repeated
+    stamp once (its first message); what was left out or reordered counted in ``dropped``. At least two such poses."""
     finite = np.isfinite(poses).all(axis=1) & np.isfinite(times)
     if not finite.all():
         dropped[f"{source}: pose not finite"] += int((~finite).sum())

@@ -242,9 +242,11 @@ class FloorFlow:
         ``time_s``: the frame's time in seconds, so that the predicted motion scales with the time since the
         previous frame (a dropped frame doubles it); None counts frames instead.
         """
-        prepared = image if isinstance(image, FlowFrame) else self.prepare(image)
-        image, texture = prepared.image, prepared.texture
-        self._check(image)  # a frame another tracker prepared
+        if isinstance(image, FlowFrame):
+            self._check(image.image)  # it may come from another tracker's ``prepare``
+        else:
+            image = self.prepare(image)
+        image, texture = image.image, image.texture
         previous, points, previous_texture = self._image, self._points, self._texture
         elapsed = 1.0 if time_s is None or previous is None else time_s - self._time_s
         self._image, self._texture, self._time_s = image, texture, 0.0 if time_s is None else time_s

@@ -7,9 +7,9 @@ import numbers
 
 
 def in_range(value, low, high, unit: str = "", whole: bool = False, low_open: bool = False) -> tuple[bool, str]:
-    """Whether ``value`` is a number (a whole one when ``whole``) from ``low`` (over it when ``low_open``) to ``high``,
-    and that range in words with its ``unit`` (e.g. " px")."""
-    number = isinstance(value, numbers.Real) and not isinstance(value, bool)
-    ok = number and (low < value if low_open else low <= value) and value <= high
-    ok = bool(ok and (not whole or float(value).is_integer()))
+    """Whether ``value`` is a number (an integer when ``whole``; True and False are not numbers here) from ``low`` (over
+    it when ``low_open``) to ``high``, and that range in words with its ``unit`` (e.g. " px")."""
+    kind = numbers.Integral if whole else numbers.Real
+    ok = isinstance(value, kind) and not isinstance(value, bool)
+    ok = bool(ok and (low < value if low_open else low <= value) and value <= high)
     return ok, f"{'a whole number ' if whole else 'a number '}{'over' if low_open else 'from'} {low} to {high}{unit}"

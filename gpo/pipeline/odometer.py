@@ -165,19 +165,18 @@ class FloorOdometer:
         if previous is not None and stamp_ns <= previous:
             problem = "repeats" if stamp_ns == previous else f"is {(previous - stamp_ns) * 1e-9:.3f} s before"
             return self._record(stamp_ns, None, Status.SKIPPED, f"stamp out of order: {problem} the previous; skipped")
-        floor = image
         self._stamp_ns = stamp_ns
         if previous is None:
-            self._track(floor, stamp_ns)
+            self._track(image, stamp_ns)
             self._measured_ns = stamp_ns
             return self._record(stamp_ns, None, Status.FIRST)
         dt = (stamp_ns - previous) * 1e-9
         if dt > self.config.max_gap_s:
             self.motion.restart()
-            self._track(floor, stamp_ns)
+            self._track(image, stamp_ns)
             self._velocity[:] = 0.0
             return self._record(stamp_ns, None, Status.HELD, f"frame gap: {dt:.2f} s without frames, motion unknown")
-        measurement = self._track(floor, stamp_ns)
+        measurement = self._track(image, stamp_ns)
         if measurement.flag is not None:
             return self._coast(stamp_ns, dt, measurement, measurement.flag)
         increment, why = self.estimator.increment(measurement, dt)

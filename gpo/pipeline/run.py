@@ -221,8 +221,9 @@ def odometry(
     tracks the current one (``gpo.io.ahead``). The records are the same whatever the threads."""
     fused = config.method == FUSED
     odometer = FloorOdometer(config.replace(method=config.fusion.floor_method) if fused else config)
+    ahead = None
     if threads is not None and threads >= 2:
-        frames = read_ahead((stamp_ns, odometer.prepare(image)) for stamp_ns, image in frames)
+        frames = ahead = read_ahead((stamp_ns, odometer.prepare(image)) for stamp_ns, image in frames)
     records: list[FrameRecord] = []
     started = time.perf_counter()
     error, interrupted = None, False
@@ -237,8 +238,8 @@ def odometry(
     except KeyboardInterrupt:
         interrupted = True
     finally:
-        if hasattr(frames, "close"):
-            frames.close()  # stops the reading thread
+        if ahead is not None:
+            ahead.close()  # stops the reading thread
     if records and all(r.flag and r.flag.startswith("unreadable") for r in records):
         raise ValueError(f"none of the {len(records)} frames could be read; the first: {records[0].flag}")
     seconds = time.perf_counter() - started
