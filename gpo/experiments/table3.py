@@ -37,15 +37,22 @@ class PaperTable3:
 
     def format(self) -> str:
         """The paper's Table 3 in the layout of ``Table3.format``."""
-        lines = ["the paper's Table 3: relative translation error [m] of GPO; path length [m] in parentheses"]
-        lengths = "".join(f"{test:>9} ({length:.2f})" for test, length in zip(self.tests, self.lengths_m, strict=True))
-        lines.append(f"{'':20}{lengths}{'Average':>10}")
-        for vector in TABLE3_VECTORS:
-            for k, (label, _) in enumerate(STATISTICS):
-                *cells, average = self.values[vector, label]
-                name = f"GPO ({vector})" if k == 0 else ""
-                lines.append(f"{name:<14}{label:<11}{''.join(f'{value:15.4f}' for value in cells)}{average:10.4f}")
-        return "\n".join(lines)
+        blocks = {vector: {label: self.values[vector, label] for label, _ in STATISTICS} for vector in TABLE3_VECTORS}
+        title = "the paper's Table 3: relative translation error [m] of GPO; path length [m] in parentheses"
+        return "\n".join(format_blocks(title, self.tests, self.lengths_m, blocks))
+
+
+def format_blocks(title: str, tests, lengths_m, blocks: dict[str, dict[str, tuple]]) -> list[str]:
+    """Table 3's layout: ``title``, the tests with their path lengths (m), then per vector its rows of
+    ``blocks[vector][label]``: one value per test and the average last (metres, four decimals)."""
+    lines = [title]
+    lengths = "".join(f"{test:>9} ({length:.2f})" for test, length in zip(tests, lengths_m, strict=True))
+    lines.append(f"{'':20}{lengths}{'Average':>10}")
+    for vector, rows in blocks.items():
+        for k, (label, (*cells, average)) in enumerate(rows.items()):
+            name = f"GPO ({vector})" if k == 0 else ""
+            lines.append(f"{name:<14}{label:<11}{''.join(f'{value:15.4f}' for value in cells)}{average:10.4f}")
+    return lines
 
 
 PAPER_TABLE3 = PaperTable3(
@@ -81,18 +88,16 @@ class Table3:
     def format(self) -> str:
         """The table as the paper lays it out, the average beside, and the ratio of the two vectors' averages."""
         tests = self.tests
-        lines = [f"Table 3: relative translation error [m] of GPO (method {self.method}, 1 m segments); path length "
-                 "[m] in parentheses"]
-        lengths = "".join(f"{test:>9} ({self.errors[test, 'median'].distance_m:.2f})" for test in tests)
-        lines.append(f"{'':20}{lengths}{'Average':>10}")
+        blocks = {}
         for vector in TABLE3_VECTORS:
             relative = [self.relative[test, vector] for test in tests]
             rows = {label: [statistic(errors) for errors in relative] for label, statistic in STATISTICS}
             rows["final error"] = [self.errors[test, vector].position_m for test in tests]
-            for k, (label, values) in enumerate(rows.items()):
-                name = f"GPO ({vector})" if k == 0 else ""
-                cells = "".join(f"{value:15.4f}" for value in values)
-                lines.append(f"{name:<14}{label:<11}{cells}{np.mean(values):10.4f}")
+            blocks[vector] = {label: (*values, np.mean(values)) for label, values in rows.items()}
+        title = (f"Table 3: relative translation error [m] of GPO (method {self.method}, 1 m segments); path length "
+                 "[m] in parentheses")
+        lengths = [self.errors[test, "median"].distance_m for test in tests]
+        lines = format_blocks(title, tests, lengths, blocks)
         averages = {v: np.mean([self.relative[test, v].mean() for test in tests]) for v in TABLE3_VECTORS}
         paper = {vector: PAPER_TABLE3.average(vector) for vector in TABLE3_VECTORS}
         lines.append(
