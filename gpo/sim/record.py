@@ -43,6 +43,7 @@ from gpo.io import cache
 from gpo.io.bag_writer import BagWriter
 from gpo.io.fingerprint import sources
 from gpo.io.trajectory import Trajectory
+from gpo.sim.ceiling import Ceiling
 from gpo.sim.disturbances import Disturbances
 from gpo.sim.drift import T265_DRIFT, TrackingDrift, tracking_odometry
 from gpo.sim.floors import FloorDesign, make_floor
@@ -126,7 +127,8 @@ class Setup:
 
     ``tracking_mount``: where the tracking camera's body frame ``camera_pose_frame`` (x forward, y left, z up) sits,
     (position (3,) metres in ``base_link``, rotation base_link <- body); None puts it at the rig's camera's own body
-    frame (as gpo's fisheye rig is the T265's fisheye standing for the whole T265). ``static_tree``: the frames the
+    frame (as gpo's fisheye rig is the T265's fisheye standing for the whole T265). ``ceiling``: the room's ceiling
+    and its lamps, which a glossy floor mirrors (``gpo.sim.ceiling``). ``static_tree``: the frames the
     bag's ``/tf_static`` holds, computed from the setup: ``gpo_static_tree`` (gpo's own) or a driver's
     (``gpo.sim.realsense.realsense_static_tree``). The rig names the image and camera_info topics and the optical
     frame, and its camera model gives the camera_info's distortion model.
@@ -144,6 +146,7 @@ class Setup:
     disturbances: Disturbances = field(default_factory=Disturbances)
     outages: tuple[Outage, ...] = ()
     tracking_mount: tuple[np.ndarray, Rotation] | None = None
+    ceiling: Ceiling = Ceiling()
     static_tree: Callable[[Setup], list[StaticTransform]] = gpo_static_tree
 
     def tracking_body(self) -> tuple[np.ndarray, Rotation]:
@@ -169,6 +172,7 @@ class Setup:
                 "start": list(plan.start), "limits": asdict(plan.limits),
             },
             "floor": asdict(self.floor),
+            "ceiling": asdict(self.ceiling),
             "seed": self.seed,
             "drift": None if self.drift is None else asdict(self.drift),
             "texel_m": self.texel_m,
@@ -296,6 +300,7 @@ class Scene:
         renderer = FloorRenderer(
             rig,
             floor,
+            ceiling=setup.ceiling,
             sheets=disturbances.place_sheets(frame_times, np.column_stack([path.x, path.y, path.yaw])),
             glints=disturbances.place_glints(),
         )

@@ -10,7 +10,7 @@ room around the floor.
 
 Then the sensor: vignetting, exposure flicker, shot and read noise, optional motion blur
 (several poses averaged over the exposure), and for a glossy floor a view-dependent sheen: the
-reflection of the ceiling lamps, which does not move with the floor.
+reflection of the ceiling's lamps (``gpo.sim.ceiling``), which moves slower than the floor.
 
 The disturbances of ``gpo.sim.disturbances`` are drawn too: a ``MovingSheet`` is part of the floor
 lookup, anti-aliased alike; a ``Glint`` is added to the image where its floor point is seen.
@@ -32,6 +32,7 @@ from scipy.spatial.transform import Rotation
 from gpo.cameras import CameraModel
 from gpo.cameras.rig import Rig, floor_points, rays_in_base
 from gpo.cameras.targets import Chessboard, FloorBoard
+from gpo.sim.ceiling import Ceiling, wrap
 from gpo.sim.disturbances import SHEET_PAD, Glint, MovingSheet, print_sheet
 from gpo.sim.floors import FloorTexture, mip_pyramid
 
@@ -74,8 +75,8 @@ class _PixelGroup:
 class FloorRenderer:
     """Renders ``rig``'s view of ``floor`` for robot poses; everything that does not move is precomputed.
 
-    ``room_margin`` metres of floor surround the texture before the walls rise ``room_height``
-    metres high. The texture repeats mirrored beyond its edge, where it is far and small.
+    ``room_margin`` metres of floor surround the texture before the walls rise to the ``ceiling``
+    (its height and lamps). The texture repeats mirrored beyond its edge, where it is far and small.
     ``sheets`` lie on the floor and move on their own; ``glints`` shine in the image (see ``Disturbances``).
 
     A frame costs one affine transform of each pixel group's floor-point table and two ``cv2.remap`` lookups
@@ -89,12 +90,12 @@ class FloorRenderer:
         floor: FloorTexture,
         sensor: Sensor = Sensor(),
         room_margin=3.0,
-        room_height=2.8,
+        ceiling: Ceiling = Ceiling(),
         *,
         sheets: tuple[MovingSheet, ...] = (),
         glints: tuple[Glint, ...] = (),
     ):
-        self.rig, self.floor, self.sensor = rig, floor, sensor
+        self.rig, self.floor, self.sensor, self.ceiling = rig, floor, sensor, ceiling
         camera = rig.camera
         self._rays_base, valid = rays_in_base(rig, camera.pixel_grid())
         floor_xy, hits_floor = floor_points(rig, self._rays_base)
@@ -103,7 +104,9 @@ class FloorRenderer:
         self.floor_points = floor_xy  # (H, W, 2) metres in base_link, NaN where the ray misses the floor
         self._groups = self._group_by_level(floor_xy, self._mip_levels(floor_xy, hits_floor), hits_floor)
         x_min, x_max, y_min, y_max = floor.extent
-        self._room = (x_min - room_margin, x_max + room_margin, y_min - room_margin, y_max + room_margin, room_height)
+        self._room = (
+            x_min - room_margin, x_max + room_margin, y_min - room_margin, y_max + room_margin, ceiling.height_m
+        )
         self._walls = cv2.pyrDown(cv2.pyrDown(skimage.data.brick())).astype(np.float32)
         self._off_floor = np.flatnonzero((valid & ~hits_floor).ravel())
         self._room_rays = np.ascontiguousarray(self._rays_base.reshape(-1, 3)[self._off_floor].T, np.float32)
@@ -260,15 +263,11 @@ class FloorRenderer:
         shade[near] = shade[near] * (1.0 - printed[:, 1]) + printed[:, 0]
 
     def _sheen(self, pose: np.ndarray) -> np.ndarray:
-        """A soft highlight where the floor mirrors the ceiling lamps (rows of 1.2 m x 0.3 m lamps, 2.4 m apart),
-        for the floor pixels (N,)."""
+        """What the glossy floor mirrors of the ceiling's lamps, grey levels for the floor pixels (N,)."""
         x, y, yaw = pose
         to_world = np.array([[np.cos(yaw), -np.sin(yaw), x], [np.sin(yaw), np.cos(yaw), y]])
         world = cv2.transform(self._ceiling[:, None], to_world)[:, 0]
-        du = np.abs(_wrap(world[:, 0], 2.4) - np.float32(1.2))
-        dv = np.abs(_wrap(world[:, 1], 2.4) - np.float32(1.2))
-        glow = np.exp(-((np.maximum(du - 0.6, 0) / 0.25) ** 2) - (np.maximum(dv - 0.15, 0) / 0.25) ** 2)
-        return 60.0 * glow
+        return self.ceiling.mirrored(world[:, 0], world[:, 1])
 
     def _draw_room(self, image: np.ndarray, pose: np.ndarray) -> None:
         """Walls (brick) and ceiling (plain, with lamps) for the rays that miss the floor."""
@@ -291,9 +290,7 @@ class FloorRenderer:
         reach = reach_z[on_ceiling]
         hit_x = centre_x + reach * ray_x[on_ceiling]
         hit_y = centre_y + reach * ray_y[on_ceiling]
-        half = np.float32(1.2)
-        lamps = (np.abs(_wrap(hit_x, 2.4) - half) < 0.6) & (np.abs(_wrap(hit_y, 2.4) - half) < 0.15)
-        shade[on_ceiling] = np.where(lamps, np.float32(230.0), np.float32(170.0))
+        shade[on_ceiling] = self.ceiling.shade(hit_x, hit_y)
         walls = ~on_ceiling
         reach = to_wall[walls]
         along_x = reach_x[walls] <= reach_y[walls]
@@ -301,7 +298,7 @@ class FloorRenderer:
             along_wall = np.where(along_x, centre_y + reach * ray_y[walls], centre_x + reach * ray_x[walls])
         height = np.float32(top - centre_z) - reach * ray_z[walls]
         rows, cols = self._walls.shape
-        u, v = _wrap(along_wall / np.float32(0.016), cols), _wrap(height / np.float32(0.016), rows)
+        u, v = wrap(along_wall / np.float32(0.016), cols), wrap(height / np.float32(0.016), rows)
         shade[walls] = np.float32(0.8) * _remap_points(self._walls, u, v, cv2.BORDER_WRAP)
         image.reshape(-1)[self._off_floor] = shade
 
@@ -397,11 +394,6 @@ def _trilinear(levels, level: int, weight, u0: np.ndarray, v0: np.ndarray, borde
         upper = _remap_points(levels[level + 1], u0 * 0.5 ** (level + 1), v0 * 0.5 ** (level + 1), border)
         lower = (1.0 - weight) * lower + weight * upper
     return lower
-
-
-def _wrap(values: np.ndarray, period: float) -> np.ndarray:
-    """``values % period`` (float32), several times faster than numpy's floating-point remainder."""
-    return values - np.floor(values * np.float32(1.0 / period)) * np.float32(period)
 
 
 def _remap_points(texture: np.ndarray, u: np.ndarray, v: np.ndarray, border: int) -> np.ndarray:
