@@ -69,6 +69,9 @@ class Ceiling:
         return self.reflection * np.exp(-(beyond_u**2) - beyond_v**2)
 
 
+DEFAULT_CEILING = Ceiling()  # the room the presets are rendered in
+
+
 def wrap(values: np.ndarray, period: float) -> np.ndarray:
     """``values % period`` (float32), several times faster than numpy's floating-point remainder."""
     return values - np.floor(values * np.float32(1.0 / period)) * np.float32(period)

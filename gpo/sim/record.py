@@ -43,7 +43,7 @@ from gpo.io import cache
 from gpo.io.bag_writer import BagWriter
 from gpo.io.fingerprint import sources
 from gpo.io.trajectory import Trajectory
-from gpo.sim.ceiling import Ceiling
+from gpo.sim.ceiling import DEFAULT_CEILING, Ceiling
 from gpo.sim.disturbances import Disturbances
 from gpo.sim.drift import T265_DRIFT, TrackingDrift, tracking_odometry
 from gpo.sim.floors import FloorDesign, make_floor
@@ -146,7 +146,7 @@ class Setup:
     disturbances: Disturbances = field(default_factory=Disturbances)
     outages: tuple[Outage, ...] = ()
     tracking_mount: tuple[np.ndarray, Rotation] | None = None
-    ceiling: Ceiling = Ceiling()
+    ceiling: Ceiling = DEFAULT_CEILING
     static_tree: Callable[[Setup], list[StaticTransform]] = gpo_static_tree
 
     def tracking_body(self) -> tuple[np.ndarray, Rotation]:

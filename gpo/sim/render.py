@@ -32,7 +32,7 @@ from scipy.spatial.transform import Rotation
 from gpo.cameras import CameraModel
 from gpo.cameras.rig import Rig, floor_points, rays_in_base
 from gpo.cameras.targets import Chessboard, FloorBoard
-from gpo.sim.ceiling import Ceiling, wrap
+from gpo.sim.ceiling import DEFAULT_CEILING, Ceiling, wrap
 from gpo.sim.disturbances import SHEET_PAD, Glint, MovingSheet, print_sheet
 from gpo.sim.floors import FloorTexture, mip_pyramid
 
@@ -90,7 +90,7 @@ class FloorRenderer:
         floor: FloorTexture,
         sensor: Sensor = Sensor(),
         room_margin=3.0,
-        ceiling: Ceiling = Ceiling(),
+        ceiling: Ceiling = DEFAULT_CEILING,
         *,
         sheets: tuple[MovingSheet, ...] = (),
         glints: tuple[Glint, ...] = (),
