@@ -7,9 +7,12 @@ on the cluster's workers at once and returns their bags' paths. On a cluster of 
 ``draw(seed)`` draws a world no method was tuned on (a ``Draw``): even seeds a forward-looking fisheye of the T265's
 family (``FISHEYE``: its EUCM perturbed, mounted at any height, pitch, roll and lever in the ranges) with a drifting
 tracking camera (``DRIFT``), odd seeds a downward pinhole camera of another focal length, height, tilt and place on
-the robot (``DOWNWARD``); a floor of one kind or a mix of kinds, its grain from other photographs; a path of
-``PATH_LENGTH_M`` metres in a room of ``ROOM_M`` (forward and reverse legs, arcs and bends, spins on the spot, and
-for the downward camera's omnidirectional robot sideways and diagonal slides). ``render_draws(client, draws)``
+the robot (``DOWNWARD``); a floor of one kind or a mix of kinds, its grain from other photographs, glossy or matte
+(``GLOSSY_SHARE``: polished screed mostly, lacquered wood and sealed tiles sometimes); a hall's ceiling of 2.5-12 m
+with a drawn grid of lamps that a glossy floor mirrors (``CEILING``); a path of the papers' lengths
+(``PATH_LENGTH_M``: 4-16 m for the fisheye, 4-20 m for the downward camera) in a room of ``ROOM_M`` (forward and
+reverse legs, arcs and bends, spins on the spot, and for the downward camera's omnidirectional robot sideways and
+diagonal slides and quarter turns). ``render_draws(client, draws)``
 renders them as ``render`` does presets. The same seed draws the same world on every machine; ``matte(draw)`` is
 that world with its floor's glossy sheen taken off.
 """
@@ -25,6 +28,7 @@ import numpy as np
 
 from gpo.cameras import EUCM, Pinhole
 from gpo.cameras.rig import CameraMount, Rig
+from gpo.sim.ceiling import Ceiling
 from gpo.sim.drift import TrackingDrift
 from gpo.sim.floors import DEFAULT_PHOTOS, FLOOR_KINDS, PHOTOS, FloorDesign
 from gpo.sim.plans import MotionPlan
@@ -62,10 +66,11 @@ DRIFT = {  # the tracking camera's drift about gpo.sim.drift.T265_DRIFT's
     "yaw_walk_rad_per_sqrt_s": (0.5e-3, 2e-3),
     "position_walk_m_per_sqrt_s": (2.5e-3, 7.5e-3),
 }
-PATH_LENGTH_M = (2.5, 3.5)
-ROOM_M = 2.0  # the robot's rear-axle centre stays within a square room this wide, centred on the start
+PATH_LENGTH_M = {"fisheye": (4.0, 16.0), "downward": (4.0, 20.0)}  # the papers' paths: 2-17 m and 4-20 m
+ROOM_M = {"fisheye": 4.0, "downward": 3.0}  # base_link stays within a square room this wide, centred on the start
 SPEED_MPS = {"fisheye": (0.25, 0.5), "downward": (0.25, 0.5)}
 SPIN_RATE_RADPS = (0.35, 0.7)
+SPIN_DEG = {"fisheye": (45.0, 180.0), "downward": (90.0, 90.0)}  # the omnidirectional robot turns quarter turns
 MIX_SHARE = 0.4  # the share of floors mixing two kinds
 OTHER_PHOTOS_SHARE = 0.5  # the share of floors whose grain comes from other photographs than the presets'
 SEGMENT_WEIGHTS = {  # kind -> weight; slides only for the omnidirectional robot of the downward camera
@@ -76,10 +81,20 @@ SEGMENT_WEIGHTS = {  # kind -> weight; slides only for the omnidirectional robot
     "stop": 0.04,
     "slide": 0.12,
 }
-MOST = {"spin": 2, "stop": 1}  # at most this many of a kind per path (they add time, not distance)
+MOST_PER_M = {"spin": 1 / 4, "stop": 1 / 8}  # at most 1 + this many per metre of a kind (time, not distance)
 FISHEYE_FLOOR_MARGIN_M = 1.0  # floor beyond the path: the fisheye's far view beyond it shows the room's walls
 DOWNWARD_FLOOR_MARGIN_M = 0.5
 TEXEL_M = {"fisheye": 1e-3, "downward": 5e-4}
+GLOSSY_SHARE = {"industrial": 0.8, "wood": 0.2, "raised": 0.2}  # screed is mostly polished; lacquer, sealed tiles
+CEILING = {  # the hall above the floor: its height and its lamps (gpo.sim.ceiling.Ceiling), uniform in the ranges
+    "height_m": (2.5, 12.0),
+    "pitch_m": (1.5, 4.0),  # along and across, each
+    "lamp_length_m": (0.6, 1.5),  # at most 0.8 of the pitch
+    "lamp_width_m": (0.1, 0.6),  # at most 0.8 of the pitch
+    "yaw_deg": (0.0, 180.0),
+    "reflection": (25.0, 90.0),  # grey levels a mirrored lamp adds on a glossy floor (the presets': 60)
+    "softness_m": (0.1, 0.4),
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,10 +120,9 @@ def draw(seed: int) -> Draw:
     kind = "fisheye" if seed % 2 == 0 else "downward"
     rig, rig_parameters = (_fisheye if kind == "fisheye" else _downward)(rng)
     floor = _floor(rng)
-    segments = draw_path(
-        rng, holonomic=kind == "downward", length_m=float(rng.uniform(*PATH_LENGTH_M)), speed_mps=SPEED_MPS[kind]
-    )
+    segments = draw_path(rng, kind, length_m=float(rng.uniform(*PATH_LENGTH_M[kind])))
     drift, drift_parameters = _drift(rng) if kind == "fisheye" else (None, {})
+    ceiling, ceiling_parameters = _ceiling(rng)
     setup = Setup(
         rig,
         MotionPlan(segments),
@@ -117,14 +131,17 @@ def draw(seed: int) -> Draw:
         drift,
         TEXEL_M[kind],
         FISHEYE_FLOOR_MARGIN_M if kind == "fisheye" else DOWNWARD_FLOOR_MARGIN_M,
+        ceiling=ceiling,
     )
     parameters = {
         **rig_parameters,
         "floor": "+".join(floor.kinds),
         "photos": "+".join(floor.photos),
+        "sheen": "on" if floor.sheen else "off",
         "path_m": round(setup.plan.distance_m, 3),
         "path": _path_summary(segments),
         **drift_parameters,
+        **ceiling_parameters,
     }
     return Draw(int(seed), kind, setup, parameters)
 
@@ -189,13 +206,34 @@ def _downward(rng: np.random.Generator) -> tuple[Rig, dict]:
 
 
 def _floor(rng: np.random.Generator) -> FloorDesign:
-    """One kind, or two mixed in patches of 0.5-2 m; the presets' grain or that of one or two other photographs."""
+    """One kind, or two mixed in patches of 0.5-2 m; the presets' grain or that of one or two other photographs;
+    glossy (it mirrors the ceiling's lamps) with the ``GLOSSY_SHARE`` of its first kind."""
     count = 2 if rng.random() < MIX_SHARE else 1
     kinds = tuple(str(kind) for kind in rng.choice(FLOOR_KINDS, size=count, replace=False))
     photos = DEFAULT_PHOTOS
     if rng.random() < OTHER_PHOTOS_SHARE:
         photos = tuple(str(p) for p in rng.choice(PHOTOS, size=int(rng.integers(1, 3)), replace=False))
-    return FloorDesign(kinds, photos, float(rng.uniform(0.5, 2.0)))
+    patch = float(rng.uniform(0.5, 2.0))
+    return FloorDesign(kinds, photos, patch, sheen=bool(rng.random() < GLOSSY_SHARE[kinds[0]]))
+
+
+def _ceiling(rng: np.random.Generator) -> tuple[Ceiling, dict]:
+    """A hall's ceiling drawn in the ``CEILING`` ranges: its height, its lamps' grid, size, turn and place, and how
+    bright and blurred a glossy floor mirrors them."""
+    values = {name: rng.uniform(*bounds) for name, bounds in CEILING.items() if name != "pitch_m"}
+    pitch = tuple(float(v) for v in rng.uniform(*CEILING["pitch_m"], size=2))
+    lamp = (min(values["lamp_length_m"], 0.8 * pitch[0]), min(values["lamp_width_m"], 0.8 * pitch[1]))
+    ceiling = Ceiling(
+        height_m=float(values["height_m"]),
+        pitch_m=pitch,
+        lamp_m=(float(lamp[0]), float(lamp[1])),
+        yaw_rad=math.radians(values["yaw_deg"]),
+        offset_m=tuple(float(v) for v in rng.uniform(0.0, 1.0, size=2) * pitch),
+        reflection=float(values["reflection"]),
+        softness_m=float(values["softness_m"]),
+    )
+    shown = {"ceiling_m": ceiling.height_m, "lamp_pitch_m": min(pitch), "reflection": ceiling.reflection}
+    return ceiling, {name: round(float(value), 3) for name, value in shown.items()}
 
 
 def _drift(rng: np.random.Generator) -> tuple[TrackingDrift, dict]:
@@ -203,44 +241,46 @@ def _drift(rng: np.random.Generator) -> tuple[TrackingDrift, dict]:
     return TrackingDrift(**values), {f"drift_{name}": round(value, 6) for name, value in values.items()}
 
 
-def draw_path(
-    rng: np.random.Generator, holonomic: bool, length_m: float, speed_mps: tuple[float, float]
-) -> list[Segment]:
-    """Segments drawn by ``SEGMENT_WEIGHTS`` (slides only when ``holonomic``) until ``length_m`` metres are driven,
-    each at a speed drawn from ``speed_mps`` (m/s); a segment that would take base_link out of the ``ROOM_M`` room
-    is drawn again; a kind drawn ``MOST`` times is not drawn again. Spins turn 45-135 degrees either way at
-    ``SPIN_RATE_RADPS``; arcs 30-120 degrees on 0.5-1.5 m, forwards or in reverse; bends 30-90 degrees over
-    1-2.5 m."""
-    kinds = [kind for kind in SEGMENT_WEIGHTS if holonomic or kind != "slide"]
+def draw_path(rng: np.random.Generator, kind: str, length_m: float) -> list[Segment]:
+    """Segments drawn by ``SEGMENT_WEIGHTS`` for a rig of ``kind`` (fisheye or downward; slides only for the
+    downward camera's omnidirectional robot) until ``length_m`` metres are driven, each at a speed drawn from
+    ``SPEED_MPS``; a segment that would take base_link out of the kind's ``ROOM_M`` room is drawn again; a kind of
+    segment drawn 1 + ``MOST_PER_M`` per metre times is not drawn again. Straights run 0.4-2.5 m, reverse legs
+    0.3-1.2 m; spins turn ``SPIN_DEG`` either way at ``SPIN_RATE_RADPS``; arcs 30-120 degrees on 0.5-1.5 m,
+    forwards or in reverse; bends 30-90 degrees over 1-2.5 m."""
+    holonomic, room, speeds = kind == "downward", ROOM_M[kind], SPEED_MPS[kind]
+    kinds = [k for k in SEGMENT_WEIGHTS if holonomic or k != "slide"]
+    most = {k: 1 + math.floor(per_m * length_m) for k, per_m in MOST_PER_M.items()}
     drawn = dict.fromkeys(kinds, 0)
     segments: list[Segment] = []
     pose, driven = (0.0, 0.0, 0.0), 0.0
     while driven < length_m:
-        weights = np.array([SEGMENT_WEIGHTS[k] * (drawn[k] < MOST.get(k, math.inf)) for k in kinds])
-        kind = kinds[rng.choice(len(kinds), p=weights / weights.sum())]
-        speed = float(rng.uniform(*speed_mps))
+        weights = np.array([SEGMENT_WEIGHTS[k] * (drawn[k] < most.get(k, math.inf)) for k in kinds])
+        chosen = kinds[rng.choice(len(kinds), p=weights / weights.sum())]
+        speed = float(rng.uniform(*speeds))
         side = float(rng.choice([-1.0, 1.0]))
-        if kind == "straight":
-            candidate = Straight(float(rng.uniform(0.4, 1.5)), speed)
-        elif kind == "reverse":
-            candidate = Straight(-float(rng.uniform(0.3, 1.0)), min(speed, 0.3))
-        elif kind == "arc":
+        if chosen == "straight":
+            candidate = Straight(float(rng.uniform(0.4, 2.5)), speed)
+        elif chosen == "reverse":
+            candidate = Straight(-float(rng.uniform(0.3, 1.2)), min(speed, 0.3))
+        elif chosen == "arc":
             direction = 1.0 if rng.random() < 0.75 else -1.0
             angle = side * math.radians(rng.uniform(30.0, 120.0))
             candidate = Arc(float(rng.uniform(0.5, 1.5)), angle, direction * min(speed, 0.35))
-        elif kind == "bend":
+        elif chosen == "bend":
             candidate = Bend(side * math.radians(rng.uniform(30.0, 90.0)), float(rng.uniform(1.0, 2.5)), speed)
-        elif kind == "spin":
-            candidate = Spin(side * math.radians(rng.uniform(45.0, 135.0)), float(rng.uniform(*SPIN_RATE_RADPS)))
-        elif kind == "stop":
+        elif chosen == "spin":
+            angle = side * math.radians(rng.uniform(*SPIN_DEG[kind]))
+            candidate = Spin(angle, float(rng.uniform(*SPIN_RATE_RADPS)))
+        elif chosen == "stop":
             candidate = Stop(float(rng.uniform(0.3, 1.0)))
         else:
             candidate = Slide(float(rng.uniform(-0.5, 0.5)), side * float(rng.uniform(0.3, 1.0)), speed)
         plan = MotionPlan([candidate], pose)
         state = plan.sample(np.linspace(0.0, plan.duration_s, 25))
-        if (np.abs(state.x) <= ROOM_M / 2).all() and (np.abs(state.y) <= ROOM_M / 2).all():
+        if (np.abs(state.x) <= room / 2).all() and (np.abs(state.y) <= room / 2).all():
             segments.append(candidate)
-            drawn[kind] += 1
+            drawn[chosen] += 1
             pose = (float(state.x[-1]), float(state.y[-1]), float(state.yaw[-1]))
             driven += plan.distance_m
     return segments
