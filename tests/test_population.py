@@ -13,7 +13,17 @@ from gpo.io.bag import Recording
 from gpo.sim.drift import tracking_odometry
 from gpo.sim.floors import FLOOR_KINDS, FloorDesign, make_floor
 from gpo.sim.plans import MotionPlan
-from gpo.sim.population import DOWNWARD, FISHEYE, MIN_FOOTPRINT_M, PATH_LENGTH_M, ROOM_M, draw, matte
+from gpo.sim.population import (
+    CEILING,
+    DOWNWARD,
+    FISHEYE,
+    MIN_FOOTPRINT_M,
+    PATH_LENGTH_M,
+    ROOM_M,
+    SPIN_DEG,
+    draw,
+    matte,
+)
 from gpo.sim.record import GROUND_TRUTH_TOPIC, ODOMETRY_TOPIC, START_NS, recording, setup_of
 from gpo.sim.segments import Slide, Spin, Straight
 
@@ -76,10 +86,14 @@ def test_downward_cameras_look_down_from_other_heights_with_other_lenses(draws):
 def test_paths_floors_and_drifts_cover_the_population(draws):
     for chosen in draws:
         plan = chosen.setup.plan
-        assert PATH_LENGTH_M[0] <= plan.distance_m  # and it ends with the segment that reached the drawn length:
-        assert plan.distance_m - plan.segments[-1].path_length_m < PATH_LENGTH_M[1]
+        shortest, longest = PATH_LENGTH_M[chosen.kind]
+        assert shortest <= plan.distance_m  # and it ends with the segment that reached the drawn length:
+        assert plan.distance_m - plan.segments[-1].path_length_m < longest
         state = plan.sample(np.linspace(0.0, plan.duration_s, 2000))
-        assert np.abs(state.x).max() <= ROOM_M / 2 + 1e-9 and np.abs(state.y).max() <= ROOM_M / 2 + 1e-9
+        half = ROOM_M[chosen.kind] / 2 + 1e-9
+        assert np.abs(state.x).max() <= half and np.abs(state.y).max() <= half
+        spins = [abs(math.degrees(s.angle_rad)) for s in plan.segments if isinstance(s, Spin)]
+        assert all(within(angle, SPIN_DEG[chosen.kind]) for angle in spins)  # quarter turns on the downward rig
     segments = [s for d in draws for s in d.setup.plan.segments]
     assert any(isinstance(s, Spin) for s in segments)
     assert any(isinstance(s, Straight) and s.distance_m < 0 for s in segments)  # reverse
@@ -88,6 +102,22 @@ def test_paths_floors_and_drifts_cover_the_population(draws):
     assert any(len(f.kinds) == 2 for f in floors) and any(f.photos != ("gravel", "grass") for f in floors)
     scales = [d.setup.drift.scale_error for d in draws if d.setup.drift is not None]
     assert min(scales) < 0 < max(scales)
+    for kind in ("fisheye", "downward"):  # glossy and matte floors, the screed among the glossy, for both rigs
+        glossy = [d.setup.floor for d in draws if d.kind == kind and d.setup.floor.sheen]
+        assert any(f.kinds == ("industrial",) for f in glossy)
+        assert any(not d.setup.floor.sheen for d in draws if d.kind == kind)
+    lengths = [d.setup.plan.distance_m for d in draws]
+    assert min(lengths) < 8.0 and max(lengths) > 14.0  # the papers' short and long paths both
+
+
+def test_ceilings_lie_in_the_issues_ranges(draws):
+    ceilings = [d.setup.ceiling for d in draws]
+    for ceiling in ceilings:
+        assert within(ceiling.height_m, CEILING["height_m"]) and within(ceiling.reflection, CEILING["reflection"])
+        assert all(within(pitch, CEILING["pitch_m"]) for pitch in ceiling.pitch_m)
+        assert ceiling.lamp_m[0] <= 0.8 * ceiling.pitch_m[0] and ceiling.lamp_m[1] <= 0.8 * ceiling.pitch_m[1]
+    heights = [c.height_m for c in ceilings]
+    assert min(heights) < 4.0 and max(heights) > 10.0  # low rooms and high halls
 
 
 def test_a_mixed_floor_is_made_of_its_kinds():
@@ -116,13 +146,15 @@ def test_a_floors_sheen_can_be_taken_off_or_put_on():
 
 
 def test_a_matte_draw_is_the_same_world_without_the_sheen():
-    chosen = draw(2)
+    chosen = draw(9)
     plain = matte(chosen)
-    assert chosen.setup.floor.kinds == ("industrial",) and plain.setup.floor.sheen is False
+    assert chosen.setup.floor.kinds == ("industrial",) and chosen.setup.floor.sheen
+    assert plain.setup.floor.sheen is False
     assert plain.setup.floor == dataclasses.replace(chosen.setup.floor, sheen=False)
-    for part in ("rig", "plan", "drift", "seed"):
+    for part in ("rig", "plan", "drift", "seed", "ceiling"):
         assert getattr(plain.setup, part) == getattr(chosen.setup, part)
-    assert plain.parameters == {**chosen.parameters, "sheen": "off"} and plain.label == chosen.label
+    assert chosen.parameters["sheen"] == "on" and plain.parameters == {**chosen.parameters, "sheen": "off"}
+    assert plain.label == chosen.label
     assert plain.setup.description() != chosen.setup.description()  # a recording of its own
 
 

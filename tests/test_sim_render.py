@@ -2,6 +2,8 @@
 model projects the board's true corners, for both rigs, on the floor and held in front of the camera;
 a moving sheet shows where its own trajectory puts it, a glint stays where the camera sees its floor point."""
 
+import dataclasses
+
 import cv2
 import numpy as np
 import pytest
@@ -9,6 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.sim.boardviews import CALIBRATION_BOARD, board_views
+from gpo.sim.ceiling import LIT, Ceiling
 from gpo.sim.disturbances import GPI_PATCH_M, Disturbances, Glint, MovingSheet, print_sheet
 from gpo.sim.floors import FLOOR_KINDS, make_floor
 from gpo.sim.render import FloorRenderer, Sensor, camera_pose_in_world, render_board_view
@@ -260,3 +263,31 @@ def test_features_on_a_glint_stand_still_while_the_floor_flows(floor):
 
     assert np.median(flow(glint_mask)) < 0.5
     assert np.median(flow(floor_mask)) > 3.0
+
+
+@pytest.mark.parametrize("rig_name, height_m", [("t265", 2.8), ("t265", 9.0), ("downward", 4.0)])
+def test_a_glossy_floor_mirrors_the_ceiling_at_the_cameras_height_plus_the_ceilings(rig_name, height_m):
+    # the mirror image of the ceiling lies height_m below the floor: seen from the camera at height h, a floor point
+    # at a horizontal distance d from the camera's foot mirrors the ceiling point at d * (h + H) / h (similar
+    # triangles), so the lamps' reflections move at h / (h + H) of the floor's speed
+    rig = {"t265": t265_rig, "downward": downward_rig}[rig_name]()
+    floor = dataclasses.replace(make_floor("industrial", (-3.0, 3.0, -3.0, 3.0), 4e-3, 1), sheen=True)
+    renderer = FloorRenderer(rig, floor, ceiling=Ceiling(height_m=height_m))
+    foot, h = rig.mount.position[:2], rig.mount.position[2]
+    seen = renderer.floor_points[renderer.hits_floor]
+    np.testing.assert_allclose(renderer._ceiling, foot + (seen - foot) * (h + height_m) / h, rtol=1e-5, atol=1e-5)
+
+
+def test_the_ceiling_seen_and_the_ceiling_mirrored_share_one_lamp_layout():
+    ceiling = Ceiling(pitch_m=(3.0, 2.0), lamp_m=(1.4, 0.4), yaw_rad=np.pi / 2, offset_m=(0.3, -0.2), reflection=50.0)
+    x, y = np.meshgrid(np.linspace(-4, 4, 161, dtype=np.float32), np.linspace(-4, 4, 161, dtype=np.float32))
+    lit = ceiling.shade(x, y) == LIT
+    # turned a quarter turn: a lamp's length runs along y, its centres at the offset plus multiples of the pitch
+    u, v = y - np.float32(-0.2), -(x - np.float32(0.3))
+    expected = (np.abs((u % 3.0) - 1.5) < 0.7) & (np.abs((v % 2.0) - 1.0) < 0.2)
+    assert (lit == expected).mean() > 0.995  # all but points on a lamp's edge, where float32 rounding decides
+    mirrored = ceiling.mirrored(x, y)
+    np.testing.assert_allclose(mirrored[lit], 50.0, rtol=1e-6)  # on a lamp: its whole reflection
+    assert mirrored[~lit].max() <= 50.0 and np.median(mirrored[~lit]) < 5.0  # fading beyond its edge
+    with pytest.raises(ValueError, match="fit"):
+        Ceiling(pitch_m=(1.0, 1.0), lamp_m=(1.2, 0.3))
