@@ -7,8 +7,9 @@
 ``--draws`` worlds (seeds ``--first-seed`` on, ``gpo.sim.population.draw``: half fisheye rigs of the T265's
 family at any height 0.08-0.30 m, pitch 0-15 degrees, roll +-2 degrees and lever 0.3-0.9 m, with a drifting
 tracking camera; half downward pinhole cameras of other lenses, heights, tilts and places; floors of every kind,
-mixed and of other grains; 2.5-3.5 m paths, so that a shared 2-core machine renders them in time, with reverse
-legs, spins on the spot, and slides for the downward camera's omnidirectional robot) are rendered on a Dask
+mixed and of other grains, glossy (mirroring a drawn hall's ceiling lamps, 2.5-12 m up) or matte; paths of the
+papers' lengths, 4-16 m for the fisheye and 4-20 m for the downward camera, with reverse legs, spins on the spot,
+and slides and quarter turns for the downward camera's omnidirectional robot) are rendered on a Dask
 cluster (``gpo.sim.population.render_draws``; cached) and swept with ``gpo.batch.sweep.sweep`` (resumable in
 ``--out``): ``gpo``, ``gpo-exact`` and ``gpo-rigid`` on the fisheye rigs (and
 ``fused``, with ``--fused``), ``features`` on the downward ones.
@@ -130,7 +131,9 @@ def explanation(row: pd.Series, out: Path) -> dict:
     slower = row.get("frames_slower_layer")
     slower = int(slower) if slower is not None and pd.notna(slower) else 0
     summary_path = out / "runs" / row["key"] / "trajectory.summary.yaml"
-    measured = yaml.safe_load(summary_path.read_text())["distance_m"] if summary_path.is_file() else None
+    summary = yaml.safe_load(summary_path.read_text()) if summary_path.is_file() else {}
+    measured = summary.get("distance_m")
+    cautions = summary.get("cautions", []) + ([summary["flagged"]] if summary.get("flagged") else [])
     return {
         "status": row["status"],
         **({"error": row["error"]} if isinstance(row.get("error"), str) and row["error"] else {}),
@@ -138,7 +141,8 @@ def explanation(row: pd.Series, out: Path) -> dict:
         "flags": flags,
         "frames_not_measured": frames,
         "frames_slower_layer": slower,
-        "explained": bool(flags or frames or slower or row["status"] != "ok"),
+        "cautions": cautions,
+        "explained": bool(cautions or row["status"] != "ok"),
     }
 
 
@@ -147,6 +151,7 @@ def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
     kind), and the runs over them with their explanations (``out``: the sweep's folder)."""
     parameters = {d.label: d.parameters for d in draws}
     kinds = {d.label: d.setup.floor.kinds for d in draws}
+    glossy = {d.label: d.parameters["sheen"] == "on" for d in draws}
     methods, failing = {}, []
     for method, rows in table.groupby("method", sort=False):
         limit = TARGETS.get(method, REPORTED_OVER.get(method))
@@ -166,6 +171,11 @@ def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
                 kind: {"draws": int(on.sum()), **distribution(rows.loc[on, "final_error_percent"])}
                 for kind in FLOOR_KINDS
                 if (on := rows["recording"].map(lambda label, kind=kind: kind in kinds[label])).any()
+            },
+            "by_finish": {
+                finish: {"draws": int(on.sum()), **distribution(rows.loc[on, "final_error_percent"])}
+                for finish, shiny in (("glossy", True), ("matte", False))
+                if (on := rows["recording"].map(lambda label, shiny=shiny: glossy[label] == shiny)).any()
             },
         }
         for _, row in rows.sort_values("final_error_percent", ascending=False).iterrows():
@@ -218,11 +228,18 @@ def print_report(result: dict) -> None:
             for kind, s in stats["by_floor_kind"].items()
         ]
         print(f"{method:10s} " + "; ".join(cells))
+    print("\nglossy floors (mirroring the ceiling's lamps) and matte ones: median / p90 / worst %")
+    for method, stats in result["methods"].items():
+        cells = [
+            f"{finish} ({s['draws']}) {_cell(s['median'])} / {_cell(s['p90'])} / {_cell(s['worst'])}"
+            for finish, s in stats["by_finish"].items()
+        ]
+        print(f"{method:10s} " + "; ".join(cells))
     unexplained = sum(not f["explained"] for f in result["failing"])
     print(
         f"\n{len(result['failing'])} runs over their method's target (gpo: over 1 %) or not finished, "
-        f"{unexplained} of them without a flag, a frame not measured, a slower layer, a leg outside the paper's model "
-        "(gpo) or an error to say why:"
+        f"{unexplained} of them without a caution (steps not measured, a slower layer, the filter refusing), a flag, "
+        "a leg outside the paper's model (gpo) or an error to say why:"
     )
     for run_ in result["failing"]:
         p = run_["parameters"]

@@ -250,3 +250,30 @@ def test_the_summary_counts_the_frames_whose_flow_held_a_slower_layer():
         FrameRecord(400_000_000, (0.04, 0.0, 0.0), 50, 10, 9, 0.5, "measured", None, 5),  # half: counted
     ]
     assert OdometryResult(records, 1.0, load_config(), "a.bag", "/camera").summary()["frames_slower_layer"] == 2
+
+
+def test_a_runs_cautions_name_each_cause_behind_a_tenth_of_its_steps():
+    """Steps not measured, steps holding a slower layer and increments the filter refused: each named once it is
+    behind ``CAUTION_SHARE`` (a tenth) of the steps, and not before."""
+    nan = float("nan")
+
+    def records(slower: int, coasted: int, plain: int) -> list[FrameRecord]:
+        first = [FrameRecord(0, (0.0, 0.0, 0.0), 0, 0, 0, nan, "first")]
+        kinds = [("measured", None, 8)] * slower + [("coasted", "too few tracks kept (3 of 60)", 0)] * coasted
+        kinds += [("measured", None, 0)] * plain
+        return first + [
+            FrameRecord((k + 1) * 10**8, (0.01 * k, 0.0, 0.0), 60, 40, 30, 0.5, status, flag, layer)
+            for k, (status, flag, layer) in enumerate(kinds)
+        ]
+
+    def cautions(slower: int, coasted: int, plain: int, refused: int | None = None) -> list[str]:
+        fusion = None if refused is None else {"refused_by_nis_gate": refused}
+        return OdometryResult(records(slower, coasted, plain), 1.0, load_config(), "a", "/c", fusion=fusion).cautions
+
+    assert cautions(9, 9, 82) == [] and cautions(9, 9, 82, refused=9) == []  # under a tenth of 100 steps each
+    found = cautions(10, 10, 80, refused=10)
+    assert found[0] == "10 of 100 steps not measured: mostly too few tracks kept"
+    assert found[1].startswith("10 of 100 steps held a second, slower layer of motion")
+    assert found[2].startswith("the filter refused 10 increments in 100 steps")
+    result = OdometryResult(records(0, 10, 90), 1.0, load_config(), "a", "/c")
+    assert result.summary()["cautions"] == result.cautions and not result.flagged  # a caution is not a flag

@@ -50,6 +50,8 @@ def print_run(result: OdometryResult) -> None:
             f"  {summary['frames_slower_layer']} measured frames held a slower layer of vectors (reflections on a "
             "glossy floor?): their median is short"
         )
+    for caution in result.cautions:
+        print(f"caution: {caution}")
     if result.shortfall:
         print(f"flagged: {result.shortfall}; the trajectory is mostly coasted or held, not measured", file=sys.stderr)
     if result.interrupted:

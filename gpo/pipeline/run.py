@@ -53,6 +53,7 @@ class FloorRun:
 
 
 MEASURED_SHARE = 0.5  # a run that measured fewer than this share of its steps is a flagged result
+CAUTION_SHARE = 0.1  # a doubtful cause behind at least this share of a run's steps is named (``cautions``)
 
 
 @dataclass
@@ -88,6 +89,33 @@ class OdometryResult:
         return None
 
     @property
+    def cautions(self) -> list[str]:
+        """The measured causes that make a finished run doubtful, each behind at least ``CAUTION_SHARE`` of its steps:
+        steps not measured (coasted, held or skipped; by their most common reason), measured steps whose flow held a
+        second, slower layer of motion (``gpo.motion.layers``: a glossy floor's reflections, which pull the floor's
+        motion short), and for ``fused`` the increments the filter's NIS gate refused (the floor and the tracking
+        camera disagreeing beyond their noise). Empty when nothing reaches it."""
+        steps = len(self.records) - 1
+        if steps <= 0:
+            return []
+        found = []
+        measured = [r for r in self.records if r.status is Status.MEASURED]
+        missed = steps - len(measured)
+        if missed >= CAUTION_SHARE * steps:
+            reasons = Counter(_reason(r.flag) for r in self.records if r.flag)
+            why = f": mostly {reasons.most_common(1)[0][0]}" if reasons else ""
+            found.append(f"{missed} of {steps} steps not measured{why}")
+        slower = sum(slower_layer(r.slower, r.kept) for r in measured)
+        if slower >= CAUTION_SHARE * steps:
+            layer = "a second, slower layer of motion (a glossy floor's reflections)"
+            found.append(f"{slower} of {steps} steps held {layer}")
+        refused = (self.fusion or {}).get("refused_by_nis_gate", 0)
+        if refused >= CAUTION_SHARE * steps:
+            found.append(f"the filter refused {refused} increments in {steps} steps: the floor and the tracking camera "
+                         "disagree beyond their noise")
+        return found
+
+    @property
     def trajectory(self) -> Trajectory:
         """base_link in odom at every frame that was not skipped (for ``fused``, the EKF's path)."""
         return self.fused if self.fused is not None else self.floor_trajectory
@@ -114,7 +142,8 @@ class OdometryResult:
 
     def summary(self) -> dict:
         """Plain numbers for people and files: distance, frames by status, flags by reason, speed, and (when any)
-        the frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor)."""
+        the frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor) and the run's
+        ``cautions``."""
         statuses = Counter(r.status for r in self.records)
         slower = sum(slower_layer(r.slower, r.kept) for r in self.records)
         reasons = Counter(_reason(r.flag) for r in self.records if r.flag)
@@ -134,6 +163,7 @@ class OdometryResult:
             "frames_per_second": round(self.frames_per_second, 1),
             "stopped_early": self.error,
             **({"flagged": self.shortfall} if self.shortfall else {}),
+            **({"cautions": self.cautions} if self.cautions else {}),
             **({"unreadable": unreadable} if unreadable else {}),
             **({"interrupted": True} if self.interrupted else {}),
             **({"fusion": self.fusion} if self.fusion is not None else {}),
