@@ -40,12 +40,14 @@ import sys
 import time
 from pathlib import Path
 
+import cloudpickle
+import correlation_peer
 import numpy as np
 import pandas as pd
 import yaml
 
 from gpo.batch.cluster import add_cluster_arguments, cluster_client
-from gpo.batch.runs import Run
+from gpo.batch.runs import Run, configured
 from gpo.batch.sweep import sweep
 from gpo.cameras.files import camera_to_kalibr
 from gpo.io import cache
@@ -202,6 +204,40 @@ def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
     return {"methods": methods, "failing": failing}
 
 
+def peer_errors(client, draws: list[Draw], bags: dict[str, Path]) -> dict[str, dict]:
+    """The correlation peer's final errors (``benchmarks/correlation_peer.py``) on each fisheye draw, by its label,
+    computed on ``client``'s workers."""
+    cloudpickle.register_pickle_by_value(correlation_peer)  # the workers need not import the benchmarks folder
+    fisheyes = [d for d in draws if d.kind == "fisheye"]
+    configs = [configured(Run(str(bags[d.label]), d.label, str(CONFIG[d.kind]), adapted(d))) for d in fisheyes]
+    futures = client.map(correlation_peer.peer_error, [str(bags[d.label]) for d in fisheyes], configs, pure=False)
+    return dict(zip([d.label for d in fisheyes], client.gather(futures), strict=True))
+
+
+def peer_report(table: pd.DataFrame, draws: list[Draw], peer: dict[str, dict]) -> dict:
+    """The peer's median final error per floor kind and finish (glossy, matte) beside each fisheye method's on the same
+    draws, and whether the method is ahead (a lower median) on every group."""
+    groups = {}
+    for d in draws:
+        if d.label in peer:
+            finish = "glossy" if d.parameters["sheen"] == "on" else "matte"
+            for kind in d.setup.floor.kinds:
+                groups.setdefault(f"{kind}, {finish}", []).append(d.label)
+    report_ = {"runs": {label: {k: round(v, 4) for k, v in e.items()} for label, e in peer.items()}, "groups": {}}
+    for group, labels in sorted(groups.items()):
+        peer_median = float(np.median([peer[label]["final_error_percent"] for label in labels]))
+        row = {"draws": len(labels), "peer": round(peer_median, 4)}
+        for method in METHODS["fisheye"][1:]:
+            errors = table[(table["method"] == method) & table["recording"].isin(labels)]["final_error_percent"]
+            row[method] = _rounded(float(errors.median()), 4) if errors.notna().any() else None
+        report_["groups"][group] = row
+    report_["ahead_everywhere"] = {
+        method: all(r[method] is not None and r[method] < r["peer"] for r in report_["groups"].values())
+        for method in METHODS["fisheye"][1:]
+    }
+    return report_
+
+
 def _rounded(value, digits):
     return None if value is None or not math.isfinite(value) else round(float(value), digits)
 
@@ -262,6 +298,16 @@ def print_report(result: dict) -> None:
         )
 
 
+def print_peer(peer: dict) -> None:
+    methods = METHODS["fisheye"][1:]
+    print("\nthe correlation peer beside the suite's fisheye methods, median final error % per floor kind and finish:")
+    print(f"{'floor':22s} {'draws':>5s} {'peer':>7s} " + " ".join(f"{m:>9s}" for m in methods))
+    for group, row in peer["groups"].items():
+        cells = " ".join(f"{_cell(row[m]):>9s}" for m in methods)
+        print(f"{group:22s} {row['draws']:5d} {_cell(row['peer']):>7s} {cells}")
+    print("ahead of the peer on every group: " + ", ".join(f"{m} {v}" for m, v in peer["ahead_everywhere"].items()))
+
+
 def _cell(value) -> str:
     return "-" if value is None else f"{value:.3f}"
 
@@ -276,6 +322,8 @@ def main() -> int:
     parser.add_argument("--out", type=Path, help="the sweep's folder (default: population or population-matte in "
                         "the cache's runs)")
     parser.add_argument("--write", type=Path, help="JSON file for the results")
+    parser.add_argument("--peer", action="store_true", help="also the correlation odometer a user might write "
+                        "(benchmarks/correlation_peer.py) on the fisheye draws, compared per floor kind and finish")
     args = parser.parse_args()
     if args.draws < 1 or args.first_seed < 0:
         parser.error("--draws must be at least 1 and --first-seed at least 0")
@@ -292,11 +340,16 @@ def main() -> int:
         rendered = time.perf_counter()
         runs = runs_of(draws, bags, args.fused)
         swept = sweep(runs, out, client, progress=sys.stderr.isatty())
+        peer = peer_errors(client, draws, bags) if args.peer else None
     finished = time.perf_counter()
     keys = set(swept.executed) | set(swept.reused)
     table = swept.table[swept.table["key"].isin(keys)]
     result = report(table, draws, out)
+    if peer is not None:
+        result["peer"] = peer_report(table, draws, peer)
     print_report(result)
+    if peer is not None:
+        print_peer(result["peer"])
     print(
         f"\n{len(draws)} draws rendered (or read from the cache) in {rendered - started:.0f} s, {len(runs)} runs "
         f"in {finished - rendered:.0f} s on {workers} workers; sweep folder {out}"
