@@ -47,19 +47,23 @@ import pandas as pd
 import yaml
 
 from gpo.batch.cluster import add_cluster_arguments, cluster_client
-from gpo.batch.runs import Run, configured
+from gpo.batch.runs import FINISHED, Run, code_version, configured, recording_digest, run_key
 from gpo.batch.sweep import sweep
+from gpo.batch.table import read_table
 from gpo.cameras.files import camera_to_kalibr
 from gpo.io import cache
-from gpo.pipeline.config import load_config
+from gpo.io.outputs import write_text
+from gpo.pipeline.config import config_to_dict, load_config
 from gpo.sim.floors import FLOOR_KINDS
 from gpo.sim.population import Draw, draw, matte, render_draws
+from gpo.sim.record import recording_path
 
 CONFIGS = Path(__file__).resolve().parents[1] / "gpo" / "configs"
 CONFIG = {"fisheye": CONFIGS / "sim_t265.yaml", "downward": CONFIGS / "sim_downward.yaml"}
 METHODS = {"fisheye": ["gpo", "gpo-exact", "gpo-rigid"], "downward": ["features"]}
 TARGETS = {"gpo-exact": 0.3, "gpo-rigid": 0.5, "features": 0.3}  # p90 of the final error, % of distance
 REPORTED_OVER = {"gpo": 1.0, "fused": 0.3}  # the methods without a target: runs over this are listed, %
+MANIFEST = "draws.json"  # in the sweep folder: each draw's recording and its digest (see ``batches``)
 PAPER_MODEL_MISSES = ("reverse", "spin")  # legs the paper's bicycle (``gpo``) reads wrong: eqs. 25-26, chapter 06
 
 
@@ -204,6 +208,62 @@ def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
     return {"methods": methods, "failing": failing}
 
 
+def batches(client, draws: list[Draw], out: Path, args) -> float:
+    """Render, run and forget the draws ``--batch`` at a time, so that the cache holds one batch's recordings (a
+    paper-length draw's bag is 0.3-1.4 GB): each batch's bags are rendered (``render_draws``), their content's digest
+    written to the sweep folder's manifest (``MANIFEST``), their runs swept into ``out`` (and the peer's, with
+    ``--peer``), then the bags deleted unless ``--keep-bags``. A draw whose manifest entry names its recording as the
+    simulator makes it now and whose runs are all finished in ``out`` is not rendered again, so an interrupted
+    benchmark resumes where it stopped. Returns the seconds spent rendering."""
+    manifest = read_manifest(out)
+    pending = [d for d in draws if not _finished(d, manifest, out, args)]
+    rendering = 0.0
+    for first in range(0, len(pending), args.batch):
+        batch = pending[first : first + args.batch]
+        print(f"draws {first + 1}-{first + len(batch)} of the {len(pending)} to run: rendering", file=sys.stderr)
+        started = time.perf_counter()
+        bags = render_draws(client, batch)
+        rendering += time.perf_counter() - started
+        digests = client.gather(client.map(recording_digest, [str(bags[d.label]) for d in batch], pure=False))
+        for chosen, digest in zip(batch, digests, strict=True):
+            manifest[chosen.label] = {"recording": str(bags[chosen.label]), "sha256": digest}
+        sweep(runs_of(batch, bags, args.fused), out, client, progress=sys.stderr.isatty())
+        if args.peer:
+            for label, error in peer_errors(client, batch, bags).items():
+                manifest[label]["peer"] = error
+        write_text(out / MANIFEST, json.dumps(manifest, indent=1) + "\n")
+        if not args.keep_bags:
+            for path in bags.values():
+                path.unlink(missing_ok=True)
+    return rendering
+
+
+def read_manifest(out: Path) -> dict:
+    """The sweep folder's manifest: per draw label, its recording's path, content digest and (``--peer``) the
+    peer's errors."""
+    path = out / MANIFEST
+    return json.loads(path.read_text()) if path.is_file() else {}
+
+
+def run_keys(runs: list[Run], manifest: dict) -> list[str]:
+    """The sweep's key of each run (``gpo.batch.runs.run_key``), from its recording's digest in the manifest."""
+    version = code_version()
+    by_path = {entry["recording"]: entry["sha256"] for entry in manifest.values()}
+    return [run_key(by_path[r.recording], config_to_dict(configured(r)), version) for r in runs]
+
+
+def _finished(chosen: Draw, manifest: dict, out: Path, args) -> bool:
+    """Whether ``chosen``'s recording, as the simulator makes it now, was run by every method in ``out``."""
+    entry = manifest.get(chosen.label)
+    if entry is None or entry["recording"] != str(recording_path(chosen.setup, label=chosen.label)):
+        return False
+    if args.peer and chosen.kind == "fisheye" and "peer" not in entry:
+        return False
+    runs = runs_of([chosen], {chosen.label: entry["recording"]}, args.fused)
+    rows = [out / "runs" / key / "row.json" for key in run_keys(runs, manifest)]
+    return all(row.is_file() and json.loads(row.read_text())["status"] in FINISHED for row in rows)
+
+
 def peer_errors(client, draws: list[Draw], bags: dict[str, Path]) -> dict[str, dict]:
     """The correlation peer's final errors (``benchmarks/correlation_peer.py``) on each fisheye draw, by its label,
     computed on ``client``'s workers."""
@@ -322,11 +382,13 @@ def main() -> int:
     parser.add_argument("--out", type=Path, help="the sweep's folder (default: population or population-matte in "
                         "the cache's runs)")
     parser.add_argument("--write", type=Path, help="JSON file for the results")
+    parser.add_argument("--batch", type=int, default=8, help="draws rendered and run at a time (default 8)")
+    parser.add_argument("--keep-bags", action="store_true", help="keep each batch's recordings in the cache")
     parser.add_argument("--peer", action="store_true", help="also the correlation odometer a user might write "
                         "(benchmarks/correlation_peer.py) on the fisheye draws, compared per floor kind and finish")
     args = parser.parse_args()
-    if args.draws < 1 or args.first_seed < 0:
-        parser.error("--draws must be at least 1 and --first-seed at least 0")
+    if args.draws < 1 or args.first_seed < 0 or args.batch < 1:
+        parser.error("--draws and --batch must be at least 1 and --first-seed at least 0")
     if args.write is not None and args.write.is_dir():
         parser.error(f"--write {args.write} is a folder; expected a JSON file's path")
     draws = [draw(seed) for seed in range(args.first_seed, args.first_seed + args.draws)]
@@ -336,23 +398,22 @@ def main() -> int:
     started = time.perf_counter()
     with cluster_client(args.scheduler, args.workers) as client:
         workers = len(client.scheduler_info()["workers"])
-        bags = render_draws(client, draws)
-        rendered = time.perf_counter()
-        runs = runs_of(draws, bags, args.fused)
-        swept = sweep(runs, out, client, progress=sys.stderr.isatty())
-        peer = peer_errors(client, draws, bags) if args.peer else None
+        rendered_s = batches(client, draws, out, args)
     finished = time.perf_counter()
-    keys = set(swept.executed) | set(swept.reused)
-    table = swept.table[swept.table["key"].isin(keys)]
+    manifest = read_manifest(out)
+    runs = runs_of(draws, {d.label: manifest[d.label]["recording"] for d in draws}, args.fused)
+    table = read_table(out)
+    table = table[table["key"].isin(run_keys(runs, manifest))]
     result = report(table, draws, out)
-    if peer is not None:
+    if args.peer:
+        peer = {d.label: manifest[d.label]["peer"] for d in draws if d.kind == "fisheye"}
         result["peer"] = peer_report(table, draws, peer)
     print_report(result)
-    if peer is not None:
+    if args.peer:
         print_peer(result["peer"])
     print(
-        f"\n{len(draws)} draws rendered (or read from the cache) in {rendered - started:.0f} s, {len(runs)} runs "
-        f"in {finished - rendered:.0f} s on {workers} workers; sweep folder {out}"
+        f"\n{len(draws)} draws, {len(runs)} runs in {finished - started:.0f} s on {workers} workers (rendering "
+        f"{rendered_s:.0f} s of it); sweep folder {out}"
     )
     if args.write:
         document = {
@@ -360,8 +421,8 @@ def main() -> int:
             "draws": len(draws),
             "seeds": [args.first_seed, args.first_seed + args.draws - 1],
             "workers": workers,
-            "render_s": round(rendered - started, 1),
-            "runs_s": round(finished - rendered, 1),
+            "render_s": round(rendered_s, 1),
+            "runs_s": round(finished - started - rendered_s, 1),
             **result,
             "draw_parameters": {d.label: d.parameters for d in draws},
             "runs": [

@@ -408,12 +408,19 @@ def recording(
     so processes that want the same recording at once never read one another's half-written bag (the files are
     identical). ``jobs``: processes rendering its frames.
     """
-    setup, own_label = setup_of(what, seed)
-    key = cache.key(setup.description(), format, sources=sources(__name__, setup.static_tree.__module__))
-    path = cache.path("recordings", label or own_label, key, ".bag" if format == "ros1" else "")
+    path = recording_path(what, format, seed, label)
     if not path.exists():
         cache.write(path, lambda partial: simulate(what, partial, format, progress, seed, jobs))
     return path
+
+
+def recording_path(
+    what: str | Setup = "sample", format: str = "ros1", seed: int | None = None, label: str | None = None
+) -> Path:
+    """Where ``recording`` keeps the bag of ``what`` (see there), whether or not it has been made."""
+    setup, own_label = setup_of(what, seed)
+    key = cache.key(setup.description(), format, sources=sources(__name__, setup.static_tree.__module__))
+    return cache.path("recordings", label or own_label, key, ".bag" if format == "ros1" else "")
 
 
 FLOOR_BOARDS = {
