@@ -2,7 +2,15 @@
 
 import matplotlib.pyplot as plt
 
-from gpo.book.ch09_evaluation import draw_population, population_errors, population_text
+from gpo.book.ch09_population import (
+    distributions_text,
+    draw_population,
+    draw_population_distributions,
+    finish,
+    population_errors,
+    population_groups,
+    population_text,
+)
 
 
 def result(errors: dict, p90: dict) -> dict:
@@ -43,4 +51,35 @@ def test_the_figure_has_a_log_panel_per_method_with_its_target():
     assert [ax.get_title() for ax in figure.axes] == ["gpo-exact", "gpo-rigid"]
     assert all(ax.get_yscale() == "log" for ax in figure.axes)
     assert [ax.lines[-1].get_ydata()[0] for ax in figure.axes] == [0.3, 0.5]
+    plt.close(figure)
+
+
+def test_a_draws_finish_comes_from_its_sheen_or_for_the_first_population_its_screed():
+    assert finish({"floor": "wood", "sheen": "on"}) == "glossy"
+    assert finish({"floor": "industrial", "sheen": "off"}) == "matte"
+    assert finish({"floor": "wood+industrial"}) == "glossy" and finish({"floor": "raised"}) == "matte"
+
+
+def test_groups_count_a_mixed_floor_under_both_kinds_and_a_failed_run_as_infinitely_far():
+    result = dict(DRAWN, draw_parameters={**DRAWN["draw_parameters"], "draw000-fisheye": {"floor": "wood+raised"}})
+    result["runs"] = [*result["runs"], {"draw": "draw002-fisheye", "method": "gpo-exact", "final_error_percent": None}]
+    groups = population_groups(result)["gpo-exact"]
+    assert groups["wood"] == groups["raised"] == [0.04] and groups["matte"] == [0.04]
+    assert groups["industrial"] == groups["glossy"] == [2.7, float("inf")] and len(groups["all"]) == 3
+
+
+def test_the_distributions_give_each_population_of_each_method_a_line_with_its_p90s():
+    lines = distributions_text({"short": DRAWN, "matte": MATTE}).splitlines()
+    exact = [line.split() for line in lines if line.startswith("gpo-exact")]
+    # the p90 of (0.04, 2.7) by linear interpolation: 0.04 + 0.9 * 2.66
+    assert exact[0][:7] == ["gpo-exact", "(0.3)", "short", "2", "1.370", "2.434", "2.70"]
+    assert exact[0][-5:] == ["0.040", "-", "2.700", "0.040", "2.700"]  # wood, raised, industrial, matte, glossy
+    assert [line.split()[0] for line in lines[1:-1]] == ["gpo-exact"] * 2 + ["gpo-rigid"] * 2 + ["features"] * 2
+
+
+def test_the_distributions_figure_has_a_panel_per_method_with_both_populations():
+    figure = draw_population_distributions({"short": DRAWN, "matte": MATTE}, ("gpo-exact", "gpo-rigid"))
+    assert [ax.get_title() for ax in figure.axes] == ["gpo-exact", "gpo-rigid"]
+    points = sum(len(c.get_offsets()) for c in figure.axes[0].collections if len(c.get_offsets()))
+    assert points >= 4 and figure.axes[0].get_yscale() == "log"
     plt.close(figure)

@@ -1,7 +1,7 @@
 """Chapter 09, evaluation: evo's own command line beside ``gpo.metrics``, evaluated paths over the truth and their
 errors along the distance, Table 4's rows (``gpo.experiments.table4``) compared and drawn, the EKF's knobs tried on
-Table 4's inputs, a panel over every row under the alignment chosen, and the population benchmark's fisheye draws
-beside the same worlds with their floors matte."""
+Table 4's inputs and a panel over every row under the alignment chosen (the population benchmark's results:
+``gpo.book.ch09_population``)."""
 
 from __future__ import annotations
 
@@ -236,62 +236,4 @@ def draw_table4_paths(table, styles: dict, end_m: float = 0.45) -> plt.Figure:
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=5, fontsize="small")
     fig.tight_layout(rect=(0, 0.05, 1, 1))
-    return fig
-
-
-POPULATION_METHODS = ("gpo-exact", "gpo-rigid")  # the fisheye methods with a target in benchmarks/population.py
-
-
-def population_errors(drawn: dict, matte: dict, methods=POPULATION_METHODS) -> dict[str, dict[str, tuple]]:
-    """Per fisheye draw of two ``benchmarks/population.py`` results (the drawn floors, and ``--matte``: the same
-    worlds with every floor matte): {draw: {method: (final error % on the drawn floor, on the matte one)}}, with
-    ``"floor"``: the draw's floor kinds."""
-    def by_run(result):
-        return {(run["draw"], run["method"]): run["final_error_percent"] for run in result["runs"]}
-
-    errors, matte_errors = by_run(drawn), by_run(matte)
-    draws = sorted({name for name, method in errors if method == methods[0]})
-    return {
-        name: {"floor": drawn["draw_parameters"][name]["floor"]}
-        | {method: (errors[name, method], matte_errors[name, method]) for method in methods}
-        for name in draws
-    }
-
-
-def population_text(drawn: dict, matte: dict, methods=POPULATION_METHODS) -> str:
-    """The fisheye draws' final errors on the drawn floors and matte, one line a draw, then each method's p90 and
-    target as ``benchmarks/population.py`` reports them."""
-    rows = population_errors(drawn, matte, methods)
-    header = f"{'draw':17s} {'floor':18s}" + "".join(f"{method:>11s} {'matte':>7s}" for method in methods)
-    lines = [header]
-    for name, row in rows.items():
-        lines.append(f"{name:17s} {row['floor']:18s}" + "".join(f"{row[m][0]:11.3f} {row[m][1]:7.3f}" for m in methods))
-    p90 = "".join(f"{drawn['methods'][m]['p90']:11.3f} {matte['methods'][m]['p90']:7.3f}" for m in methods)
-    lines.append(f"{'p90':36s}" + p90)
-    targets = ", ".join(f"{m} {drawn['methods'][m]['p90_target']} %" for m in methods)
-    lines.append(f"final position error, % of the distance; p90 targets: {targets}")
-    return "\n".join(lines)
-
-
-def draw_population(drawn: dict, matte: dict, methods=POPULATION_METHODS) -> plt.Figure:
-    """One panel a method: each fisheye draw's final error on its drawn floor (filled, red where the floor holds glossy
-    screed) and on the same floor matte (hollow), on a log scale, with the method's p90 target."""
-    rows = population_errors(drawn, matte, methods)
-    fig, axes = plt.subplots(1, len(methods), figsize=(6.5 * len(methods), 4), sharey=True, squeeze=False)
-    positions = np.arange(len(rows))
-    glossy = np.array(["industrial" in row["floor"] for row in rows.values()])
-    for ax, method in zip(axes[0], methods, strict=True):
-        on_drawn = np.array([row[method][0] for row in rows.values()])
-        on_matte = np.array([row[method][1] for row in rows.values()])
-        ax.vlines(positions, np.minimum(on_drawn, on_matte), np.maximum(on_drawn, on_matte), color="0.8", lw=1)
-        ax.scatter(positions[glossy], on_drawn[glossy], color="tab:red", zorder=3, label="drawn floor, glossy screed")
-        ax.scatter(positions[~glossy], on_drawn[~glossy], color="tab:blue", zorder=3, label="drawn floor, no screed")
-        ax.scatter(positions, on_matte, facecolors="none", edgecolors="k", zorder=3, label="the same floor, matte")
-        ax.axhline(drawn["methods"][method]["p90_target"], color="k", ls="--", lw=1, label="p90 target")
-        ax.set_yscale("log")
-        ax.set_xticks(positions, [name.removesuffix("-fisheye") for name in rows], rotation=60, fontsize="small")
-        ax.set_title(method)
-    axes[0, 0].set_ylabel("final position error [% of distance]")
-    axes[0, 0].legend(fontsize="small")
-    fig.tight_layout()
     return fig
