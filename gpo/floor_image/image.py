@@ -102,6 +102,16 @@ class FloorImage:
         affine = [[0.0, -step, far - 0.5 * step], [-step, 0.0, left - 0.5 * step]]
         return cls(width, height, np.array(affine))
 
+    def widened(self, scale: float) -> FloorImage:
+        """The floor image ``scale`` times as wide and long about the same centre, on as many pixels: each pixel
+        ``scale`` times the side, the same orientation, the centre pixel on the same floor point."""
+        if not (math.isfinite(scale) and scale > 0):
+            raise GroundImageError(f"a floor image is widened by a positive scale, got {scale!r}")
+        centre = np.array([(self.width - 1) / 2, (self.height - 1) / 2])
+        linear = self.affine[:, :2]
+        offset = self.affine[:, 2] + (1.0 - scale) * linear @ centre
+        return FloorImage(self.width, self.height, np.column_stack([scale * linear, offset]), self.metric)
+
     @property
     def metres_per_pixel(self) -> float:
         """Side of a pixel on the floor, metres (the square root of the affine map's area scale)."""

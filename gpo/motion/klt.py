@@ -37,6 +37,7 @@ import numpy as np
 
 from gpo.motion.layers import slower_count, slower_layer
 from gpo.motion.median import median_of
+from gpo.motion.overview import Overview, disagrees
 from gpo.motion.ranges import in_range
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
@@ -52,6 +53,9 @@ TEXTURE_LAG_PX = 3  # the texture measure compares the floor image with itself t
 
 
 STATISTICS_STEP = 2  # image statistics are taken over every second row and column
+
+
+OVERVIEW_GRID = 4  # the whole-view check's measurement: this many by this many points over the image's middle half
 
 
 class FlowError(ValueError):
@@ -77,6 +81,10 @@ class KLTParameters:
     ``flat_field_px``: each image is divided by its mean over boxes this wide before tracking, which removes slow
     brightness gradients (0: not). ``normalise_brightness``: False tracks the images as they come (no flat field,
     no common mean and contrast), to see what the normalisation is for.
+    ``overview_scale``: the whole-view check (``gpo.motion.overview``) correlates views this many times wider and
+    longer than the floor image (0: no check; the estimators that take it say so); ``overview_tolerance_px``: a flow
+    median further than this from the overview's shift (floor-image pixels) is replaced by it, when the overview's
+    correlation peak reaches ``overview_min_peak``.
     """
 
     max_corners: int = 150
@@ -96,6 +104,9 @@ class KLTParameters:
     min_texture_grey: float = 1.5
     flat_field_px: int = 41
     normalise_brightness: bool = True
+    overview_scale: float = 2.0
+    overview_tolerance_px: float = 1.5
+    overview_min_peak: float = 0.05
 
     def __post_init__(self):
         ranges = self._ranges()
@@ -107,6 +118,7 @@ class KLTParameters:
         """Each parameter: whether its value lies in the range a real rig can use, and that range with its unit."""
         window_ok, _ = in_range(self.window_px, 5, 101, whole=True)
         flat_ok, _ = in_range(self.flat_field_px, 3, 1001, whole=True)
+        overview_ok, _ = in_range(self.overview_scale, 1.5, 8)
         return {
             "max_corners": in_range(self.max_corners, 1, 10_000, " corners", whole=True),
             "quality_level": in_range(self.quality_level, 0, 1, ", a share of the best corner's score", low_open=True),
@@ -124,6 +136,9 @@ class KLTParameters:
             "min_inlier_ratio": in_range(self.min_inlier_ratio, 0, 1, ", a share of the kept vectors"),
             "min_texture_grey": in_range(self.min_texture_grey, 0, 255, " grey levels"),
             "flat_field_px": (self.flat_field_px == 0 or flat_ok, "0 (none) or a whole number from 3 to 1001 px"),
+            "overview_scale": (self.overview_scale == 0 or overview_ok, "0 (no check) or a number from 1.5 to 8"),
+            "overview_tolerance_px": in_range(self.overview_tolerance_px, 0, 100, " px", low_open=True),
+            "overview_min_peak": in_range(self.overview_min_peak, 0, 1, ", a share of the correlation"),
         }
 
     @property
@@ -140,7 +155,8 @@ class FlowQuality:
     ``inliers``: kept vectors near the median; ``spread_px``: their robust standard deviation (1.4826 MAD),
     pixels; ``flag``: None when the frame is measured, else why it is not; ``slower``: kept vectors moving along
     the median at under ``SLOWER_SPEED`` of its length, once it is ``SLOWER_MIN_PX`` long (a slower layer, such
-    as reflections; see the module).
+    as reflections; see the module); ``overview``: the frame's motion is the whole-view check's
+    (``gpo.motion.overview``), the tracks having disagreed with it.
     """
 
     tracked: int
@@ -149,6 +165,7 @@ class FlowQuality:
     spread_px: float
     flag: str | None = None
     slower: int = 0
+    overview: bool = False
 
     @property
     def ok(self) -> bool:
@@ -196,10 +213,12 @@ class FlowMeasurement:
 @dataclass(frozen=True, eq=False)
 class FlowFrame:
     """A floor image made ready to track (``FloorFlow.prepare``): flat-fielded and scaled to one mean and contrast
-    (``image``, uint8), with its local contrast beyond noise (``texture``, grey levels; ``floor_texture``)."""
+    (``image``, uint8), with its local contrast beyond noise (``texture``, grey levels; ``floor_texture``) and the
+    wider view the whole-view check correlates (``overview``, float32, or None)."""
 
     image: np.ndarray
     texture: float
+    overview: np.ndarray | None = None
 
 
 @dataclass
@@ -223,17 +242,21 @@ class FloorFlow:
     _detect_mask: np.ndarray | None = field(default=None, init=False, repr=False)
     _valid: np.ndarray | None = field(default=None, init=False, repr=False)
     _size: tuple[int, int] | None = field(default=None, init=False, repr=False)
+    _overview: np.ndarray | None = field(default=None, init=False, repr=False)
+    _correlator: Overview | None = field(default=None, init=False, repr=False)
 
     def restart(self) -> None:
         """Forget the previous frame: the next ``track`` call starts afresh."""
-        self._image, self._points = None, None
+        self._image, self._points, self._overview = None, None, None
         self._velocity, self._predicted = np.zeros(2, np.float32), False
 
-    def prepare(self, image: np.ndarray) -> FlowFrame:
-        """``image`` (H, W) uint8 made ready to track (``FlowFrame``). It depends on the image alone, so frames can be
-        prepared ahead, in another thread, while earlier ones are tracked."""
+    def prepare(self, image: np.ndarray, overview: np.ndarray | None = None) -> FlowFrame:
+        """``image`` (H, W) uint8 made ready to track (``FlowFrame``), with the wider ``overview`` of the same frame
+        when the whole-view check runs (``KLTParameters.overview_scale``). It depends on the frame alone, so frames
+        can be prepared ahead, in another thread, while earlier ones are tracked."""
         self._check(image)
-        return FlowFrame(*self._normalised(image))
+        wide = None if overview is None else overview.astype(np.float32)
+        return FlowFrame(*self._normalised(image), wide)
 
     def track(self, image: np.ndarray | FlowFrame, time_s: float | None = None) -> FlowMeasurement | None:
         """The motion from the previous frame to ``image`` (H, W) uint8, or to the frame ``prepare`` made of it;
@@ -246,6 +269,7 @@ class FloorFlow:
             self._check(image.image)  # it may come from another tracker's ``prepare``
         else:
             image = self.prepare(image)
+        overview, previous_overview, self._overview = image.overview, self._overview, image.overview
         image, texture = image.image, image.texture
         previous, points, previous_texture = self._image, self._points, self._texture
         elapsed = 1.0 if time_s is None or previous is None else time_s - self._time_s
@@ -261,6 +285,8 @@ class FloorFlow:
             points = self._detect(previous)
         prediction = (self._velocity * elapsed).astype(np.float32)
         measurement, surviving = self._measure(previous, image, points, prediction)
+        if overview is not None and previous_overview is not None:
+            measurement = self._checked(measurement, previous_overview, overview)
         self._points = surviving
         self._predicted = measurement.quality.ok
         if measurement.quality.ok:
@@ -306,6 +332,22 @@ class FloorFlow:
             return _flagged(start, end, len(points), flag, inlier, spread), end
         measurement = FlowMeasurement(start, end, median, vectors.mean(axis=0), inlier, quality)
         return measurement, end
+
+    def _checked(self, measurement: FlowMeasurement, previous: np.ndarray, current: np.ndarray) -> FlowMeasurement:
+        """``measurement``, or the whole-view check's translation where it disagrees (``gpo.motion.overview``): the
+        overview's shift measured at the floor image's middle, a ``OVERVIEW_GRID`` square grid of points."""
+        p = self.parameters
+        if self._correlator is None:
+            self._correlator = Overview(p.overview_scale, current.shape[::-1])
+        found = self._correlator.shift(previous, current)
+        if not disagrees(measurement.median, measurement.flag, found, p.overview_tolerance_px, p.overview_min_peak):
+            return measurement
+        width, height = self._size
+        u, v = np.meshgrid(*(np.linspace(0.25, 0.75, OVERVIEW_GRID) * (side - 1) for side in (width, height)))
+        start = np.column_stack([u.ravel(), v.ravel()]).astype(np.float32)
+        shift, count = found.shift_px, len(start)
+        quality = FlowQuality(count, count, count, 0.0, overview=True)
+        return FlowMeasurement(start, start + shift.astype(np.float32), shift, shift, np.ones(count, bool), quality)
 
     def _check(self, image: np.ndarray) -> None:
         if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 2:

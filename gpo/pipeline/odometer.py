@@ -12,7 +12,7 @@ import numpy as np
 
 from gpo.floor_image.analytic import analytic_table
 from gpo.floor_image.gpi import ground_plane_image
-from gpo.floor_image.image import RemapTable
+from gpo.floor_image.image import GroundImageError, RemapTable
 from gpo.floor_image.ortho import ortho_rectify
 from gpo.motion.keypoints import FeatureMatches, FeatureTracker, Keypoints, detect
 from gpo.motion.klt import FloorFlow, FlowFrame, FlowMeasurement
@@ -102,10 +102,21 @@ class FloorOdometer:
             self._mask = None if keypoints_route else self.table.valid.astype(np.uint8)
         else:
             self.motion = FloorFlow(config.klt, mask=self.table.valid)
+        self._overview_table = self._overview(config)
         self.pose = np.zeros(3)
         self._stamp_ns: int | None = None
         self._measured_ns: int | None = None
         self._velocity = np.zeros(3)  # the last measured increment per second (dx, dy, dtheta)
+
+    def _overview(self, config: OdometryConfig) -> RemapTable | None:
+        """The table of the wider view the estimator's flow is checked on (``gpo.motion.overview``), or None: the
+        estimator takes no check, the config turns it off, or the wider view lies mostly outside the camera's."""
+        if not (self.estimator.MOTION == "tracks" and self.estimator.OVERVIEW and config.klt.overview_scale):
+            return None
+        try:
+            return floor_table(config.replace(floor=config.floor.widened(config.klt.overview_scale)))
+        except GroundImageError:
+            return None
 
     def floor_image(self, image: np.ndarray) -> np.ndarray:
         """The floor image (8-bit) of a grey frame (mono8, or mono16 taken to its upper 8 bits; ``Recording.frames``
@@ -149,7 +160,8 @@ class FloorOdometer:
             return OtherSize(f"{size[0]} x {size[1]} pixels, not the calibration's", size)
         if self.estimator.MOTION == "keypoints":
             return self.keypoints(image)
-        return self.motion.prepare(self.floor_image(image))
+        overview = None if self._overview_table is None else self._overview_table.apply(image)
+        return self.motion.prepare(self.floor_image(image), overview)
 
     def step(self, stamp_ns: int, image: np.ndarray | FlowFrame | Keypoints | Unreadable) -> FrameRecord:
         """Take one camera frame (H, W) in stamp order, or what ``prepare`` made of it; return its record. A frame that

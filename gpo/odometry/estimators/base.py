@@ -80,13 +80,15 @@ class FloorEstimator(ABC):
     """One frame's floor motion in, the robot's increment out.
 
     ``NAME``: the method's name in configs and on the command line. ``MOTION``: the measurement it reads (``tracks``
-    or ``keypoints``). Made once per run from the run's ``config`` (a ``gpo.pipeline.config.OdometryConfig``, which
-    the method's later stage defines: an estimator reads the sections it needs, e.g. ``vector``, ``model``,
-    ``features``) and the ``geometry`` of what it measures.
+    or ``keypoints``); ``OVERVIEW``: whether the KLT flow it reads is checked on a wider view of the floor
+    (``gpo.motion.overview``: the suite's estimators, not the paper's). Made once per run from the run's ``config``
+    (a ``gpo.pipeline.config.OdometryConfig``, which the method's later stage defines: an estimator reads the
+    sections it needs, e.g. ``vector``, ``model``, ``features``) and the ``geometry`` of what it measures.
     """
 
     NAME: ClassVar[str]
     MOTION: ClassVar[str] = "tracks"
+    OVERVIEW: ClassVar[bool] = False  # whether its tracks are checked on a wider view (``gpo.motion.overview``)
 
     def __init__(self, config: Any, geometry: FloorGeometry):
         self.config = config

@@ -1,13 +1,14 @@
 """``gpo-rigid``: no kinematic model; the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
-frame's increment."""
+frame's increment. A frame measured by the whole-view check (``gpo.motion.overview``: a translation, no rotation)
+takes the exact arc of a robot that does not slide at its rear axle instead, as ``gpo-exact`` does."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-from gpo.odometry.estimators.base import FloorEstimator
-from gpo.odometry.kinematics import increment_from_point_pairs
+from gpo.odometry.estimators.base import FloorEstimator, vector_motion
+from gpo.odometry.kinematics import increment_from_point_motion, increment_from_point_pairs
 
 RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
 
@@ -16,8 +17,12 @@ class RigidFit(FloorEstimator):
     """The rigid motion of the kept tracks, fitted on those RANSAC finds agreeing."""
 
     NAME = "gpo-rigid"
+    OVERVIEW = True
 
     def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
+        if measurement.quality.overview:
+            where, moved = vector_motion(measurement, self.geometry, "median")
+            return increment_from_point_motion(where, where + moved), None
         start, end = self.geometry.metres(measurement.start), self.geometry.metres(measurement.end)
         threshold = RANSAC_THRESHOLD_PX * self.geometry.pixel_m
         _, inliers = cv2.estimateAffinePartial2D(

@@ -1,0 +1,54 @@
+"""The floor's motion read on the whole of a wider view: a check of the KLT flow that reflections cannot fool.
+
+On a glossy floor whose own grain is faint, the mirrored lamps are most of what the Lucas-Kanade windows see: their
+edges pull every track, the reflection layer moves at a few hundredths of the floor's speed (``gpo.motion.layers``),
+and the flow can lock onto it from the first frames with no check of ``gpo.motion.klt`` failing. Phase correlation
+over a whole view weighs every spatial frequency alike (the cross-power spectrum is whitened), so the floor's fine
+grain outweighs the lamps' blurred reflections; over a view ``scale`` times wider and longer than the floor image
+(``gpo.floor_image.image.FloorImage.widened``, the same pixel count) the floor's shift stays inside the view.
+
+``Overview.shift`` gives the shift between two consecutive views in the floor image's pixels; ``disagrees`` tells
+when it replaces the flow's median: the flow was flagged or lies more than ``tolerance_px`` from it, and the
+correlation's peak is clear. ``gpo.motion.klt.FloorFlow`` then measures the frame's motion as the overview's
+translation at the floor image's middle (``FlowQuality.overview``). On a matte floor the two agree to a fraction of a
+pixel and nothing changes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+
+@dataclass(frozen=True)
+class OverviewShift:
+    """How far the floor moved between two views (``shift_px``, (2,) in the floor image's pixels, u right, v down)
+    and how clear the correlation's peak was (``peak``, 0-1: the share of the whitened correlation in it)."""
+
+    shift_px: np.ndarray
+    peak: float
+
+
+class Overview:
+    """Phase correlation between consecutive views of ``size`` (width, height) pixels, each ``scale`` times the floor
+    image's pixel (see the module)."""
+
+    def __init__(self, scale: float, size: tuple[int, int]):
+        self.scale = float(scale)
+        self._window = cv2.createHanningWindow(size, cv2.CV_32F)
+
+    def shift(self, previous: np.ndarray, current: np.ndarray) -> OverviewShift:
+        """The floor's shift from the view ``previous`` to ``current`` (float32, (height, width))."""
+        (du, dv), peak = cv2.phaseCorrelate(previous, current, self._window)
+        return OverviewShift(self.scale * np.array([du, dv]), float(peak))
+
+
+def disagrees(
+    median: np.ndarray, flag: str | None, overview: OverviewShift, tolerance_px: float, min_peak: float
+) -> bool:
+    """Whether the overview's shift should replace the flow's ``median`` (its ``flag`` when flagged): the flow was
+    flagged or lies more than ``tolerance_px`` from it, and the overview's peak reaches ``min_peak``."""
+    agrees = flag is None and np.hypot(*(median - overview.shift_px)) <= tolerance_px
+    return not agrees and overview.peak >= min_peak
