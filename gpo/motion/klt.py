@@ -106,7 +106,7 @@ class KLTParameters:
     normalise_brightness: bool = True
     overview_scale: float = 2.0
     overview_tolerance_px: float = 1.5
-    overview_min_peak: float = 0.05
+    overview_min_peak: float = 0.3  # pairs of independent noise images peak at up to 0.11, floors at 0.6-0.9
 
     def __post_init__(self):
         ranges = self._ranges()
