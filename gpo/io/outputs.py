@@ -121,7 +121,7 @@ FULL = (errno.ENOSPC, errno.EDQUOT)
 
 def _full(path: Path) -> OSError:
     """The error of a write of ``path`` that found the disk full: it names ``path`` and what was kept."""
-    kept = f"the {path} already there is kept as it was" if path.exists() else f"no {path} is left half written"
+    kept = "the file already there is kept as it was" if path.exists() else "nothing is left half written"
     error = OSError(f"{path}: the disk is full (no space left on the device); {kept}: free some room, then run again")
     error.errno = errno.ENOSPC
     return error

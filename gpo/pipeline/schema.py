@@ -370,7 +370,8 @@ def load_mount(path) -> CameraMount:
     try:
         section = MountSection.model_validate(document["mount"])
     except ValidationError as error:
-        raise ValueError(f"{path}: " + "\n  ".join(_problem(e) for e in error.errors()[:8])) from None
+        problems = [_problem({**e, "loc": ("mount", *e["loc"])}) for e in error.errors()[:8]]
+        raise ValueError(f"{path}: " + "\n  ".join(problems)) from None
     return _mount(section, path)
 
 
