@@ -796,6 +796,13 @@ def test_evaluate_names_a_bag_given_as_the_estimate(world, tmp_path, capsys, giv
     assert "codec" not in err and "utf-8" not in err
 
 
+def test_evaluate_against_a_truth_that_stands_still(world, tmp_path, capsys):
+    """No distance travelled: the final error in per cent of it is undefined (it was a ZeroDivisionError)."""
+    still = world.tum("still.tum", [f"{1 + 0.1 * i:.1f} 0 0 0 0 0 0 1" for i in range(30)])
+    check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), still], 0, "distance (truth)        0.000 m",
+          "final position error    2900.0 mm = nan % of the distance")  # the estimate ends 2.9 m from the start
+
+
 def test_evaluate_names_bag_and_topic_of_a_truth_with_nan(world, tmp_path, capsys):
     bag = tmp_path / "nan_truth.bag"
     with BagWriter(bag) as writer:

@@ -61,7 +61,6 @@ MAX_NODES = 100_000
 """The most YAML nodes a config may hold once its aliases are expanded."""
 
 
-
 def ranged(low, high, unit: str = "", whole: bool = False, low_open: bool = False):
     """A number of the file held to its range on a real rig, ``unit`` and all (``gpo.motion.ranges.check_value``)."""
     return Annotated[
@@ -74,6 +73,7 @@ Place = ranged(-REACH_M, REACH_M, " m")  # a coordinate in base_link
 Height = ranged(0, 5, " m above the floor", low_open=True)
 Angle = ranged(-360, 360, " deg")
 Angles = tuple[Angle, Angle, Angle]
+Component = ranged(-1, 1, ", a unit quaternion's component")
 
 
 class Section(BaseModel):
@@ -103,7 +103,7 @@ class MountSection(Section):
     ``pitch_deg`` and ``roll_deg`` are for people and only checked."""
 
     position_m: tuple[Place, Place, Height]
-    quaternion_xyzw: tuple[float, float, float, float] | None = None
+    quaternion_xyzw: tuple[Component, Component, Component, Component] | None = None
     rpy_deg: Angles | None = None
     height_m: Height | None = None
     pitch_deg: Angle | None = None
