@@ -201,8 +201,8 @@ class FinalError:
 
     @property
     def percent(self) -> float:
-        """The final position error in per cent of the distance travelled."""
-        return 100.0 * self.position_m / self.distance_m
+        """The final position error in per cent of the distance travelled; NaN for a truth that did not move."""
+        return 100.0 * self.position_m / self.distance_m if self.distance_m > 0 else float("nan")
 
     def __str__(self) -> str:
         return (

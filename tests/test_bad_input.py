@@ -335,9 +335,11 @@ def test_a_full_disk_keeps_the_earlier_output_whole(world, tmp_path, capsys, mon
         raise OSError(28, "No space left on device", str(path))
 
     monkeypatch.setattr(Trajectory, "write_tum", full)
-    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 1,
-          "No space left on device", changed=[out.with_suffix(".summary.yaml")])
+    _, err = check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 1,
+                   f"{out}: the disk is full", "the file already there is kept",
+                   changed=[out.with_suffix(".summary.yaml")])
     assert out.read_text() == "# a good trajectory\n"
+    assert ".partial" not in err and "Errno" not in err  # the user's path, not the hidden temporary one
 
 
 def test_write_bag_needs_room_for_the_copy(world, tmp_path, capsys, monkeypatch):
@@ -352,6 +354,17 @@ def test_write_bag_never_replaces_a_bag(world, tmp_path, capsys, existing):
     target = world.bag() if existing == "bag" else world.bag("black")
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum",
                                            "--write-bag", target], 1, "exists", "never replaced")
+
+
+@pytest.mark.parametrize(("name", "words"), [("out.db3", ["a ros1 bag is one file named *.bag: name it out.bag"]),
+                                             ("missing/out.txt", ["a ros1 bag is one file named *.bag"])])
+def test_write_bag_is_checked_before_the_run_and_named_as_given(world, tmp_path, capsys, monkeypatch, name, words):
+    monkeypatch.setattr(gpo.pipeline.run, "odometry", lambda *a, **k: pytest.fail("frames were read"))
+    target = tmp_path / name
+    _, err = check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out",
+                                                    tmp_path / "t.tum", "--write-bag", target], 1,
+                   f"--write-bag (a copy of {world.bag()}) {target}", *words)
+    assert ".partial" not in err and not (tmp_path / "t.tum").exists()
 
 
 @pytest.mark.parametrize("fmt", ["ros1", "ros2"])
@@ -613,11 +626,11 @@ def _delete(path: str):
         (_set("floor_image", [1, 2]), ["floor_image", "dictionary", "[1, 2]"]),
         (_set("rate_hz", float("nan")), ["rate_hz", "finite number"]),
         (_set("fusion.accel_mps2", float("inf")), ["fusion.accel_mps2", "finite number"]),
-        (_set("rate_hz", -30.0), ["rate_hz", "greater than 0"]),
-        (_set("klt.window_px", 4), ["klt", "window_px=4", "an odd whole number from 5 to 101 px"]),
-        (_set("klt.max_corners", 10**8), ["klt", "max_corners=100000000", "from 1 to 10000 corners"]),
-        (_set("klt.min_distance_px", 1e30), ["klt", "min_distance_px=1e+30", "from 0 to 1000 px"]),
-        (_set("floor_image.metres_per_pixel", 0), ["floor_image.metres_per_pixel", "greater than 0"]),
+        (_set("rate_hz", -30.0), ["rate_hz must be a number over 0 to 1000 Hz, got -30.0"]),
+        (_set("klt.window_px", 4), ["klt.window_px must be an odd whole number from 5 to 101 px, got 4"]),
+        (_set("klt.max_corners", 10**8), ["klt.max_corners must be a whole number from 1 to 10000 corners"]),
+        (_set("klt.min_distance_px", 1e30), ["klt.min_distance_px must be a number from 0 to 1000 px, got 1e+30"]),
+        (_set("floor_image.metres_per_pixel", 0), ["floor_image.metres_per_pixel must be a number from 1e-05"]),
         (_set("camera.intrinsics", [0.6, 1.1, "thirty", 71.5, 106.0, 100.0]), ["camera.intrinsics.2", "'thirty'"]),
         (_set("camera.resolution", [212, 200, 3]), ["camera.resolution", "at most 2 items"]),
         (_set("camera.camera_model", "fisheye-9000"), ["camera", "unsupported camera model 'fisheye-9000'"]),
@@ -638,6 +651,57 @@ def test_config_errors_name_the_file_and_the_key(world, tmp_path, capsys, edit, 
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
           str(config), *words)
     assert not (tmp_path / "t.tum").exists()
+
+
+@pytest.mark.parametrize(
+    ("edit", "words"),
+    [  # each key, its value, its range and unit: what no real rig has
+        (_set("rate_hz", 1e6), ["rate_hz must be a number over 0 to 1000 Hz, got 1000000.0"]),
+        (_set("camera.resolution", [10**6, 200]), ["camera.resolution.0 must be a whole number from 1 to 20000 px"]),
+        (_set("mount.position_m", [0.6, 0.0, 12.0]), ["mount.position_m.2 must be a number over 0 to 5 m above the "
+                                                      "floor, got 12.0"]),
+        (_set("mount.position_m", [1e4, 0.0, 0.12]), ["mount.position_m.0 must be a number from -50 to 50 m"]),
+        (_set("mount.rpy_deg", [1.5, 6e3, 0.0]), ["mount.rpy_deg.1 must be a number from -360 to 360 deg, got 6000.0"]),
+        (_set("floor_image.x_range_m", [0.7, 1e6]), ["floor_image.x_range_m.1 must be a number from -50 to 50 m"]),
+        (_set("floor_image.metres_per_pixel", 5.0), ["floor_image.metres_per_pixel", "to 0.1 m, got 5.0"]),
+        (_set("kinematics.wheelbase_m", 1e3), ["kinematics.wheelbase_m must be a number over 0 to 20 m, got 1000.0"]),
+        (_set("odometry.max_gap_s", 1e9), ["odometry.max_gap_s must be a number over 0 to 60 s"]),
+        (_set("fusion.tracking_position_walk_m_per_sqrt_s", 1e3),
+         ["fusion.tracking_position_walk_m_per_sqrt_s must be a number from 0 to 10 m/sqrt(s), got 1000.0"]),
+        (_set("fusion.floor_reference_inliers", 0), ["fusion.floor_reference_inliers must be a whole number from 1"]),
+        (_set("fusion.tracking_mount", {"position_m": [0.6, 0, 1e5], "rpy_deg": [0, 0, 0]}),
+         ["fusion.tracking_mount.position_m must be 3 numbers from -50 to 50 m"]),
+        (_set("features.cardinality", 10**9), ["features.cardinality must be None or a whole number from 3 to 10000"]),
+    ],
+)
+def test_a_number_no_real_rig_has_is_refused_with_its_range_and_unit(world, tmp_path, capsys, monkeypatch, edit,
+                                                                     words):
+    monkeypatch.setattr(gpo.pipeline.run, "odometry", lambda *a, **k: pytest.fail("frames were read"))
+    config = _config(world, tmp_path, edit)
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
+          str(config), *words)
+
+
+def test_a_floor_image_of_terabytes_is_refused_before_it_is_made(world, tmp_path, capsys, monkeypatch):
+    """An extent each of whose numbers is in range, at a pixel in range, still makes too many pixels: named with
+    its keys before a table is built (the remap table's build would ask for terabytes)."""
+    monkeypatch.setattr(gpo.pipeline.run, "odometry", lambda *a, **k: pytest.fail("frames were read"))
+    config = _config(world, tmp_path, _set("floor_image", {"x_range_m": [-40, 40], "y_range_m": [-40, 40],
+                                                           "metres_per_pixel": 1e-5}))
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out", tmp_path / "t.tum"], 1,
+          str(config), "floor_image: x_range [-40.0, 40.0] m", "8000000 x 8000000 pixels, over the 16000000 allowed")
+
+
+def test_a_missing_camchain_names_the_config_and_its_key(world, tmp_path, capsys):
+    def edit(document):
+        del document["camera"]
+        document["camchain"] = "calib/camchain.yaml"
+
+    config = _config(world, tmp_path, edit)
+    _, err = check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", config, "--out",
+                                                    tmp_path / "t.tum"], 1,
+                   f"{config}: camchain calib/camchain.yaml: no file {tmp_path / 'calib' / 'camchain.yaml'}")
+    assert "Errno" not in err
 
 
 @pytest.mark.parametrize(
@@ -697,10 +761,13 @@ def test_a_config_that_is_no_file(world, tmp_path, capsys, kind):
         (["1.0 0 0 0 0 0 0 1", "1.1 zero 0 0 0 0 0 1"], [":2: not a number"]),
         ([f"{1 + 0.1 * i:.1f} nan 0 0 0 0 0 1" for i in range(5)], ["must be finite numbers"]),
         ([], ["holds no poses"]),
-        (["1.0 0 0 0 0 0 0 1", "1.2 0 0 0 0 0 0 1", "1.1 0 0 0 0 0 0 1"], ["stamps go backwards at pose 2"]),
+        (["1.0 0 0 0 0 0 0 1", "1.2 0 0 0 0 0 0 1", "1.1 0 0 0 0 0 0 1"], [":3: '1.1 0 0 0 0 0 0 1': the stamps go "
+                                                                             "backwards"]),
+        (["1.0 0 0 0 0 0 0 1", "1.1 0 0 0 0 0 0 0"], [":2: '1.1 0 0 0 0 0 0 0': the quaternion", "zero length"]),
     ],
 )
 def test_evaluate_names_what_is_wrong_with_the_estimate(world, tmp_path, capsys, lines, words):
+    """Lines are counted from 1, as editors count them."""
     estimate = world.tum("estimate.tum", lines)
     check(capsys, [world.root, tmp_path], ["evaluate", estimate, world.truth()], 1, str(estimate), *words)
 
@@ -716,6 +783,35 @@ def test_evaluate_reads_a_pose_repeated_as_it_was_once(world, tmp_path, capsys):
     lines = [f"{1 + 0.1 * i:.1f} {0.1 * i:.3f} 0 0 0 0 0 1" for i in range(30)]
     estimate = world.tum("same.tum", lines[:10] + lines[9:])
     check(capsys, [world.root, tmp_path], ["evaluate", estimate, world.truth()], 0, "poses associated        30")
+
+
+@pytest.mark.parametrize("given", ["bag", "bag_named_tum"])
+def test_evaluate_names_a_bag_given_as_the_estimate(world, tmp_path, capsys, given):
+    estimate = world.bag()
+    if given == "bag_named_tum":
+        estimate = tmp_path / "estimate.tum"
+        estimate.write_bytes(world.bag().read_bytes())
+    _, err = check(capsys, [world.root, tmp_path], ["evaluate", estimate, world.truth()], 1,
+                   f"{estimate} is a ROS bag, not a TUM text file", "gpo run --out")
+    assert "codec" not in err and "utf-8" not in err
+
+
+def test_evaluate_against_a_truth_that_stands_still(world, tmp_path, capsys):
+    """No distance travelled: the final error in per cent of it is undefined (it was a ZeroDivisionError)."""
+    still = world.tum("still.tum", [f"{1 + 0.1 * i:.1f} 0 0 0 0 0 0 1" for i in range(30)])
+    check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), still], 0, "distance (truth)        0.000 m",
+          "final position error    2900.0 mm = nan % of the distance")  # the estimate ends 2.9 m from the start
+
+
+def test_evaluate_names_bag_and_topic_of_a_truth_with_nan(world, tmp_path, capsys):
+    bag = tmp_path / "nan_truth.bag"
+    with BagWriter(bag) as writer:
+        for i in range(6):
+            writer.add_pose("/mocap/base_link", START_NS + i * FRAME_NS, [np.nan if i == 3 else 0.01 * i, 0.0, 0.0],
+                            [0, 0, 0, 1], "world")
+    check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), bag, "--gt-topic", "/mocap/base_link"], 1,
+          f"{bag}, topic /mocap/base_link: 1 of 6 poses hold NaN or infinite numbers, the first at message 4, stamp "
+          "1700000000.099999999 s")
 
 
 @pytest.mark.parametrize("delta", ["0", "-1", "nan", "inf", "one"])
@@ -745,7 +841,7 @@ def test_evaluate_plot_on_a_full_disk_leaves_nothing_half_written(world, tmp_pat
     plot = tmp_path / "plot.png"
     plot.write_bytes(b"\x89PNG an earlier plot")
     check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), world.truth(), "--plot", plot], 1,
-          "No space left on device")
+          f"{plot}: the disk is full", "the file already there is kept")
 
 
 @pytest.mark.parametrize(
@@ -782,7 +878,11 @@ def _images(folder: Path, images: list[np.ndarray]) -> list[Path]:
         ("two", "7x5", ["only 2 usable view(s)", "at least 3"]),
         ("blank", "7x5", ["no chessboard of 7x5 inner corners", "found in any of the 3 images"]),
         ("two", "9x7", ["no chessboard of 9x7 inner corners"]),
-        ("two", "8x6", ["shows a pattern of 7x5 inner corners", "--board 7x5", "partly hidden"]),
+        ("two", "8x6", ["shows a board of 7x5 inner corners", "--board 7x5", "partly hidden"]),
+        ("nine", "7x5", ["view1.png shows a board of 9x6 inner corners, more than the 7x5 given: give --board 9x6"]),
+        ("nine", "6x4", ["view0.png shows a board of 9x6 inner corners, more than the 6x4 given: give --board 9x6"]),
+        ("nine", "10x7", ["view0.png shows a board of 9x6 inner corners", "if 10x7 counted the board's squares, give "
+                                                                           "--board 9x6"]),
         ("mixed", "7x5", ["calibrate images of one camera at one resolution"]),
         ("text", "7x5", ["not an image that OpenCV can read"]),
         ("missing", "7x5", ["no such image file"]),
@@ -800,11 +900,15 @@ def test_calibrate_names_what_is_wrong_with_the_views(tmp_path, capsys, views, b
             "two": [board_image(seed=0), board_image(seed=1, shift=(10, 5))],
             "blank": [np.full((240, 320), 255, np.uint8) for _ in range(3)],
             "mixed": [board_image(seed=0), board_image(size=(200, 300), seed=1)],
+            "nine": [board_image(corners=(9, 6), seed=i, shift=(10 * i, 5 * i)) for i in range(3)],
         }[views]
         paths = _images(tmp_path, images)
     out = tmp_path / "calib.yaml"
-    check(capsys, [tmp_path], ["calibrate", *paths, "--board", board, "--square", "0.03", "--out", out], 1, *words)
+    printed, err = check(capsys, [tmp_path], ["calibrate", *paths, "--board", board, "--square", "0.03", "--out", out],
+                         1, *words)
     assert not out.exists()
+    if views == "nine":  # the board's part that a smaller pattern finds is never offered: it gives a garbage fit
+        assert "--board 6x4" not in printed + err.replace("the 6x4 given", "")
 
 
 @pytest.mark.parametrize(
@@ -829,7 +933,9 @@ def test_calibrate_checks_its_options_before_working(tmp_path, capsys, monkeypat
 def _fit(ok: bool):
     def calibrate_images(*args, **kwargs):
         verdict = "good" if ok else "NOT A GOOD CALIBRATION"
-        return SimpleNamespace(ok=ok, camera=T265_LIKE, summary=lambda: f"eucm calibration ({verdict})")
+        warnings = [] if ok else ["RMS reprojection error 4.44 px > 1 px"]
+        return SimpleNamespace(ok=ok, camera=T265_LIKE, summary=lambda: f"eucm calibration ({verdict})",
+                               warnings=warnings)
 
     return calibrate_images
 
@@ -841,7 +947,10 @@ def test_a_bad_fit_never_replaces_a_good_calibration(tmp_path, capsys, monkeypat
     monkeypatch.setattr(gpo.cli.calibrate, "calibrate_images", _fit(ok=False))
     check(capsys, [tmp_path], ["calibrate", *paths, "--board", "7x5", "--square", "0.03", "--out", good], 1,
           "NOT A GOOD CALIBRATION", f"{good} is kept", "calib.flagged.yaml")
-    assert "camera_model: eucm" in (tmp_path / "calib.flagged.yaml").read_text()
+    flagged = (tmp_path / "calib.flagged.yaml").read_text()
+    assert "camera_model: eucm" in flagged  # the file carries its flag, each warning, as comments before the camera
+    assert flagged.startswith("# flagged by gpo calibrate: NOT A GOOD CALIBRATION (eucm calibration (NOT A GOOD")
+    assert "# WARNING: RMS reprojection error 4.44 px > 1 px\n" in flagged
 
 
 def test_force_and_a_good_fit_replace_the_calibration(tmp_path, capsys, monkeypatch):
@@ -864,7 +973,8 @@ def test_force_and_a_good_fit_replace_the_calibration(tmp_path, capsys, monkeypa
         ("existing.bag", [], 1, ["exists; name a new bag"]),
         ("folder", ["--format", "ros2"], 1, ["exists; name a new bag"]),
         ("sim.txt", [], 1, ["a ros1 bag is one file named *.bag"]),
-        ("sim.bag", ["--format", "ros2"], 1, ["a ros2 bag a folder"]),
+        ("sim.bag", ["--format", "ros2"], 1, ["a ros2 bag is a folder", "name it sim, say"]),
+        ("sim.db3", ["--format", "ros2"], 1, ["a ros2 bag is a folder", "named neither *.bag nor *.db3 or *.mcap"]),
         ("sim.bag", ["--format", "ros3"], 2, ["invalid choice: 'ros3'"]),
     ],
 )

@@ -722,8 +722,10 @@ def test_writer_refuses_what_it_cannot_write(tmp_path):
         BagWriter(tmp_path / "old.bag")
     with pytest.raises(ValueError, match="a ros1 bag is one file named"):
         BagWriter(tmp_path / "recording")
-    with pytest.raises(ValueError, match="a ros2 bag a folder"):
+    with pytest.raises(ValueError, match="a ros2 bag is a folder, named neither"):
         BagWriter(tmp_path / "recording.bag", "ros2")
+    with pytest.raises(ValueError, match=r"recording\.mcap: a ros2-mcap bag is a folder, .*name it recording, say"):
+        BagWriter(tmp_path / "recording.mcap", "ros2-mcap")  # the storage file inside the folder is named so
     with pytest.raises(ValueError, match="unknown bag format 'ros3'"):
         BagWriter(tmp_path / "recording", "ros3")
 

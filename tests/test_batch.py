@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 import gpo
-from gpo.batch.cluster import WORKER_ENVIRONMENT_UNSET, cluster_client
+from gpo.batch.cluster import REACH_TIMEOUT_S, WORKER_ENVIRONMENT_UNSET, cluster_client
 from gpo.batch.runs import Run, configured, recording_digest, run_key
 from gpo.batch.spec import SweepSpec, load_spec
 from gpo.batch.sweep import sweep
@@ -79,7 +79,8 @@ def test_overrides_go_through_the_config_schema():
     config = configured(Run("unused.bag", "x", overrides={"klt.window_px": 15, "odometry.method": "gpo-rigid"}))
     assert (config.klt.window_px, config.method) == (15, "gpo-rigid")
     assert config.klt.max_corners == load_config().klt.max_corners  # the rest as the base config says
-    with pytest.raises(ValueError, match=r"klt\.window: unknown key; did you mean window_px\?"):
+    with pytest.raises(ValueError, match=r"^the default config with klt\.window changed: klt\.window: unknown key; "
+                                         r"did you mean window_px\?"):  # no temporary file named
         configured(Run("unused.bag", "x", overrides={"klt.window": 15}))
     with pytest.raises(ValueError, match=r"override mount\.pitch_deg: 3\.0 has no effect"):
         configured(Run("unused.bag", "x", overrides={"mount.pitch_deg": 3.0}))
@@ -125,6 +126,54 @@ def test_spec_expands_to_the_grid_and_names_its_errors(tmp_path):
         load_spec(spec_path)
     with pytest.raises(ValueError, match=r"glob .*nothing\*\.bag matches no file"):
         SweepSpec(recordings=[{"glob": str(tmp_path / "nothing*.bag")}]).expand()
+
+
+def _sweep_spec(folder: Path, **changes) -> Path:
+    """A spec of one recording file (never opened by the checks) and a valid grid, with ``changes``."""
+    spec = folder / "sweep.yaml"
+    document = {"recordings": [{"file": "hall.bag"}], "vary": {"klt.window_px": [15, 21]}} | changes
+    spec.write_text(yaml.safe_dump(document))
+    return spec
+
+
+@pytest.mark.parametrize(
+    ("case", "words"),
+    [
+        ("file", ["--out {folder}/notes.txt is a file; expected a folder for the results"]),
+        ("spec", ["--out {folder}/sweep.yaml is an input of this command"]),
+        ("read-only", ["--out {folder}/locked/results: the folder {folder}/locked cannot be written (read-only)"]),
+        ("vary", ["{folder}/sweep.yaml: the default config with klt.window changed: klt.window: unknown key; did you "
+                  "mean window_px?"]),
+        ("range", ["{folder}/sweep.yaml: the default config with klt.window_px changed: klt.window_px must be an odd "
+                   "whole number from 5 to 101 px, got 4"]),
+        ("scheduler", ["--scheduler tcp://127.0.0.1:1: no Dask scheduler there (connection refused)",
+                       "dask scheduler --port 1", "leave out --scheduler"]),
+    ],
+)
+def test_the_sweep_command_checks_its_inputs_before_the_cluster_starts(tmp_path, capsys, monkeypatch, case, words):
+    """Each refused at once, with the spec, the option or the address named (before: after the cluster started,
+    with a raw [Errno 20/30], a deleted temporary file's name, or a 22 s wait and "Timed out")."""
+    import distributed
+
+    monkeypatch.setattr(distributed, "LocalCluster", lambda *a, **k: pytest.fail("a cluster was started"))
+    (tmp_path / "notes.txt").write_text("notes\n")
+    (tmp_path / "locked").mkdir()
+    real_access = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != tmp_path / "locked" and real_access(path, mode))
+    changes = {"vary": {"vary": {"klt.window": [15]}}, "range": {"vary": {"klt.window_px": [15, 4]}}}.get(case, {})
+    spec = _sweep_spec(tmp_path, **changes)
+    out = {"file": "notes.txt", "spec": "sweep.yaml", "read-only": "locked/results"}.get(case, "results")
+    argv = ["sweep", str(spec), "--out", str(tmp_path / out)]
+    argv += ["--scheduler", "tcp://127.0.0.1:1"] if case == "scheduler" else []
+    started = time.monotonic()
+    assert main(argv) == 1
+    seconds = time.monotonic() - started
+    err = capsys.readouterr().err
+    for word in words:
+        assert word.format(folder=tmp_path) in err, err
+    assert "Traceback" not in err and "Errno" not in err and "/tmp/tmp" not in err
+    assert not (tmp_path / "results").exists() and (tmp_path / "notes.txt").read_text() == "notes\n"
+    assert seconds < REACH_TIMEOUT_S + 5  # the probe's timeout and the checks' own time, never Dask's 20 s wait
 
 
 def test_a_preset_with_its_own_seed_is_the_preset(bags):

@@ -106,7 +106,10 @@ def test_evaluate_names_the_file_with_bad_numbers(tmp_path, capsys):
     estimate = tmp_path / "estimate.tum"
     estimate.write_text(truth.read_text().replace("1.0 0.0 0.0", "nan 0.0 0.0"))
     assert main(["evaluate", str(estimate), str(truth)]) == 1
-    assert capsys.readouterr().err == f"error: {estimate}: positions and quaternions must be finite numbers\n"
+    assert capsys.readouterr().err == (  # line 12: the header comment, then the eleventh pose
+        f"error: {estimate}:12: '1.000000000 nan 0.0 0.0 0.0 0.0 0.0 1.0': positions and quaternions must be finite "
+        "numbers\n"
+    )
 
 
 def test_recordings_rendered_at_once_are_the_bag_rendered_alone(tmp_path, monkeypatch, capsys):

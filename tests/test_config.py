@@ -1,11 +1,17 @@
-"""Rig configs: a rig written and read back is the same rig; a camchain file can stand in for the camera."""
+"""Rig configs: a rig written and read back is the same rig; a camchain file can stand in for the camera; every number
+held to the range a real rig can have, which admits what the presets and chapters use."""
+
+from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
+import gpo
 from gpo.cameras.files import save_kalibr
 from gpo.cameras.rig import CameraMount
+from gpo.fusion import FusionSettings
+from gpo.pipeline.config import load_config
 from gpo.pipeline.schema import load_rig, save_rig
 from gpo.sim.rigs import downward_rig, t265_rig
 
@@ -103,3 +109,43 @@ def test_missing_fields_are_named(tmp_path):
     (tmp_path / "rig.yaml").write_text(yaml.safe_dump(document))
     with pytest.raises(ValueError, match="give either 'camera'"):
         load_rig(tmp_path / "rig.yaml")
+
+
+def test_the_ranges_admit_what_the_presets_and_chapters_use():
+    """The shipped configs, the values of chapter 07's fusion sliders at both ends, and its tracking camera that is not
+    to be trusted (walks of 5 m/sqrt(s) and 1 rad/sqrt(s)) all lie in the ranges a real rig can have; one step beyond
+    each bound is refused with the key, the range and its unit."""
+    from gpo.book.ch07_ekf_fusion import FUSION_SLIDERS
+
+    for name in ("sim_t265.yaml", "sim_downward.yaml"):
+        load_config(Path(gpo.__file__).parent / "configs" / name)
+    for field, (_, low, high) in FUSION_SLIDERS.items():
+        for exponent in (low, high):
+            FusionSettings(**{field: 10.0**exponent})
+    FusionSettings(tracking_position_walk_m_per_sqrt_s=5.0, tracking_yaw_walk_rad_per_sqrt_s=1.0)
+    with pytest.raises(ValueError, match=r"^tracking_position_walk_m_per_sqrt_s must be a number from 0 to 10 "
+                                         r"m/sqrt\(s\), got 10\.5$"):
+        FusionSettings(tracking_position_walk_m_per_sqrt_s=10.5)
+    with pytest.raises(ValueError, match=r"^accel_mps2 must be a number from 0 to 100 m/s\^2 per sqrt\(Hz\), got -0\."):
+        FusionSettings(accel_mps2=-0.1)
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        ("rate_hz", 0.0, r"rate_hz must be a number over 0 to 1000 Hz, got 0\.0"),
+        ("rate_hz", 1000.5, r"rate_hz must be a number over 0 to 1000 Hz, got 1000\.5"),
+        ("mount", {"position_m": [0.6, 0.0, 5.5], "rpy_deg": [0, 6, 0]}, r"mount\.position_m\.2 must be a number "
+                                                                         r"over 0 to 5 m above the floor, got 5\.5"),
+        ("mount", {"position_m": [-50.5, 0.0, 0.1], "rpy_deg": [0, 6, 0]}, r"mount\.position_m\.0 must be a number "
+                                                                           r"from -50 to 50 m, got -50\.5"),
+        ("mount", {"position_m": [0.6, 0.0, 0.1], "rpy_deg": [0, 361, 0]}, r"mount\.rpy_deg\.1 must be a number from "
+                                                                           r"-360 to 360 deg, got 361\.0"),
+    ],
+)
+def test_a_value_just_beyond_its_range_is_refused_with_key_value_range_and_unit(tmp_path, key, value, message):
+    document = yaml.safe_load(save_rig(tmp_path / "rig.yaml", t265_rig()).read_text()) | {key: value}
+    (tmp_path / "rig.yaml").write_text(yaml.safe_dump(document))
+    with pytest.raises(ValueError, match=rf"rig\.yaml: {message}$"):
+        load_rig(tmp_path / "rig.yaml")
+    load_rig(save_rig(tmp_path / "again.yaml", t265_rig()))  # and the rig itself, in range, is read

@@ -112,13 +112,17 @@ def test_bad_bags_and_mounts_are_clear_errors_that_say_what_to_give(tmp_path, ca
         zero = _small_bag(tmp_path / "zero.bag", zeros, [("base_link", rig.frame_id)])
     error = _fails(["config", str(zero), *out], capsys)
     assert "fx must" in error and "got 0.0" in error and "--camera CALIB instead" in error
-    # with --camera and --mount the same bags give a config; a mount below the floor or pitched up is refused
+    # with --camera and --mount the same bags give a config; a mount below the floor, pitched up, or ten times
+    # higher than the bag's /tf_static (0.12 m, _small_bag) is refused
     calib = tmp_path / "calib.yaml"
     save_kalibr(calib, {"cam0": rig.camera})
     for name, position, rpy, expected in (
         ("good", [0.6, 0.0, 0.12], [1.5, 6.0, 0.0], None),
-        ("below", [0.6, 0.0, -0.12], [1.5, 6.0, 0.0], "at or below it"),
+        ("below", [0.6, 0.0, -0.12], [1.5, 6.0, 0.0], "mount.position_m.2 must be a number over 0 to 5 m above the "
+                                                      "floor, got -0.12"),
         ("up", [0.6, 0.0, 0.12], [0.0, -80.0, 0.0], "does not see the floor"),
+        ("tall", [0.6, 0.0, 1.2], [1.5, 6.0, 0.0], f"--mount {tmp_path / 'tall.yaml'} puts the camera 1.200 m above "
+                                                   f"the floor, {zero}'s /tf_static 0.120 m"),
     ):
         mount = tmp_path / f"{name}.yaml"
         mount.write_text(yaml.safe_dump({"mount": {"position_m": position, "rpy_deg": rpy}}))

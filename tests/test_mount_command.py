@@ -88,3 +88,35 @@ def test_wrong_board_size_two_boards_and_another_camera_are_clear_errors(tmp_pat
         [*args[:3], str(other), *args[4:], "--board", "7x5"], capsys
     )
     assert not (tmp_path / "m.yaml").exists()
+
+
+def test_a_kind_the_measured_tilt_contradicts_is_refused(tmp_path, capsys):
+    """The T265's axis lies 84 deg from straight down (pitched 6 deg below the horizon, gpo.sim.rigs), the downward
+    camera's 1 deg: either called the other kind writes nothing (it wrote a mount 86 deg off with exit 0)."""
+    for rig_name, wrong, seen, degrees in (("t265", "downward", "forward", 84), ("downward", "forward", "downward", 1)):
+        image, calib = _files(tmp_path, rig_name)
+        out = tmp_path / f"{rig_name}_mount.yaml"
+        error = _fails(["mount", str(image), "--camera", str(calib), "--board", "7x5", "--square", "0.02", "--kind",
+                        wrong, "--out", str(out)], capsys)
+        assert f"{image}: the camera's optical axis lies {degrees} deg from straight down, so it looks {seen}" in error
+        assert f"not {wrong}: give kind '{seen}' or 'auto' (--kind)" in error
+        assert not out.exists()
+
+
+@pytest.mark.parametrize(("rig_name", "square", "height"), [("t265", "0.2", "1.200"), ("downward", "0.2", "2.500"),
+                                                             ("t265", "0.002", "0.012")])
+def test_a_height_no_camera_of_its_kind_has_is_flagged_and_keeps_a_good_file(rig_name, square, height, tmp_path,
+                                                                             capsys):
+    """The board's squares are 0.02 m (gpo.sim.record.FLOOR_BOARDS): given ten times too large or too small, the
+    camera's height comes out ten times off (0.12 m and 0.25 m truly), outside the kind's HEIGHT_RANGE_M."""
+    image, calib = _files(tmp_path, rig_name)
+    out = tmp_path / "mount.yaml"
+    out.write_text("mount: {position_m: [0.6, 0.0, 0.12], rpy_deg: [1.5, 6.0, 0.0]}  # a good one\n")
+    argv = ["mount", str(image), "--camera", str(calib), "--board", "7x5", "--square", square, "--out", str(out)]
+    assert main(argv) == 1
+    printed = capsys.readouterr()
+    assert f"warning: the camera comes out {height} m above the floor" in printed.out
+    assert "check the board's square size" in printed.out and f"{out} is kept" in printed.err
+    assert out.read_text().endswith("# a good one\n")
+    flagged = (tmp_path / "mount.flagged.yaml").read_text()
+    assert f"# warning: the camera comes out {height} m above the floor" in flagged  # the flag inside the file

@@ -85,7 +85,7 @@ def test_features_config_round_trip_and_its_rules(tmp_path):
         config.replace(method="gpo-exact")
     text = (tmp_path / "downward.yaml").read_text().replace("refit_px: 1.5", "refit_px: -1")
     (tmp_path / "bad.yaml").write_text(text)
-    with pytest.raises(ValueError, match="features: refit_px"):
+    with pytest.raises(ValueError, match=r"features\.refit_px must be a number from 0 to 100 px \(0: no refit\)"):
         load_config(tmp_path / "bad.yaml")
 
 

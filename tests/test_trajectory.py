@@ -1,5 +1,7 @@
 """Trajectories and TUM files: exact round trips, the real rpg_trajectory_evaluation files, bad input."""
 
+import re
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -71,13 +73,28 @@ def test_reads_the_real_groundtruth_file(fetch_or_skip):
 @pytest.mark.parametrize(
     ("content", "message"),
     [
-        ("1.0 2 3\n", "8 numbers"),
-        ("1.0 0 0 0 0 0 0 one\n", "not a number"),
-        ("2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", "backwards"),
+        ("1.0 2 3\n", ":1: a TUM line has 8 numbers"),
+        ("1.0 0 0 0 0 0 0 one\n", ":1: not a number"),
+        ("# t x y z qx qy qz qw\n2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", ":3: '1 0 0 0 0 0 0 1': the stamps go backwards"),
+        ("1 0 0 0 0 0 0 1\n\n2 0 0 0 0 0 0 0\n", ":3: '2 0 0 0 0 0 0 0': the quaternion .* has zero length"),
+        ("1 0 0 0 0 0 0 1\n2 nan 0 0 0 0 0 1\n", ":2: '2 nan 0 0 0 0 0 1': positions and quaternions must be finite"),
     ],
 )
-def test_bad_tum_files_name_the_line(tmp_path, content, message):
+def test_bad_tum_files_name_the_line_counted_from_one(tmp_path, content, message):
+    """The line numbers are the ones an editor shows: the first line is 1, comments and blank lines count."""
     path = tmp_path / "bad.tum"
     path.write_text(content)
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(ValueError, match=f"^{re.escape(str(path))}{message}"):
         Trajectory.read_tum(path)
+
+
+def test_a_file_that_is_not_text_is_named_not_decoded(tmp_path):
+    bag = tmp_path / "estimate.tum"
+    bag.write_bytes(b"#ROSBAG V2.0\n\xb3\x00\xff" * 10)  # a ROS1 bag's first bytes, whatever its name
+    with pytest.raises(ValueError, match=r"estimate\.tum is a ROS bag, not a TUM text file") as raised:
+        Trajectory.read_tum(bag)
+    assert "codec" not in str(raised.value)
+    noise = tmp_path / "noise.tum"
+    noise.write_bytes(bytes(range(128, 256)))
+    with pytest.raises(ValueError, match=r"noise\.tum is binary data, not a TUM text file"):
+        Trajectory.read_tum(noise)

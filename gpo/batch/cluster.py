@@ -8,9 +8,11 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import socket
 from collections.abc import Iterator
 
-CONNECT_TIMEOUT_S = 20  # the longest wait for a scheduler given by its address
+CONNECT_TIMEOUT_S = 20  # the longest wait for a scheduler given by its address to answer as Dask does
+REACH_TIMEOUT_S = 3.0  # the longest wait for its host to accept a connection at all
 
 
 # Dask's nannies start workers with MALLOC_TRIM_THRESHOLD_=65536 (distributed.nanny.pre-spawn-environ), which turns
@@ -25,21 +27,30 @@ WORKER_ENVIRONMENT_UNSET = ("MALLOC_TRIM_THRESHOLD_",)
 def cluster_client(scheduler: str | None = None, workers: int | None = None) -> Iterator:
     """A Dask client: of the scheduler at ``scheduler`` (``tcp://HOST:PORT``), else at ``DASK_SCHEDULER_ADDRESS``,
     else of a new local cluster of ``workers`` single-threaded worker processes (default: one per core), closed on
-    leaving. Raises ValueError naming the address of a scheduler that does not answer within ``CONNECT_TIMEOUT_S``.
+    leaving. Raises ValueError naming the address (and where it came from) when it is not of the form
+    ``tcp://HOST:PORT``, when nothing there accepts a connection within ``REACH_TIMEOUT_S`` (``check_reachable``, before
+    Dask is imported), or when the scheduler does not answer within ``CONNECT_TIMEOUT_S``.
 
     The local workers start without ``WORKER_ENVIRONMENT_UNSET``. Workers of a cluster given by its address keep
     their own environment: started by ``dask worker`` they run the odometry up to 1.8x slower unless started with
     ``--no-nanny`` or with a Dask config file that sets ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_``
     to ``null``."""
+    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
+    if address:
+        source = "--scheduler" if scheduler else "DASK_SCHEDULER_ADDRESS"
+        check_reachable(address, source)
     import dask
     from distributed import Client, LocalCluster
 
-    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
     if address:
         try:
             client = Client(address, timeout=CONNECT_TIMEOUT_S)
-        except (OSError, TimeoutError) as error:
-            raise ValueError(f"cannot reach the Dask scheduler at {address}: {error}") from None
+        except Exception as error:  # what answers there may be no Dask at all: its bytes read as a message's length
+            raise ValueError(
+                f"{source} {address}: something accepts connections there, but it did not answer as a Dask scheduler "
+                f"within {CONNECT_TIMEOUT_S} s ({type(error).__name__}: {error}); give the address `dask scheduler` "
+                "prints"
+            ) from None
         with client:
             yield client
         return
@@ -52,6 +63,27 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
         ) as cluster, Client(cluster) as client,
     ):
         yield client
+
+
+def check_reachable(address: str, source: str = "--scheduler") -> None:
+    """A scheduler's ``address`` checked to be ``tcp://HOST:PORT`` (or another of Dask's protocols, left to Dask) and,
+    for tcp, its host to accept a connection on the port within ``REACH_TIMEOUT_S``: a ValueError naming the address,
+    ``source`` (the option or variable it came from) and what to do, in seconds rather than Dask's long wait."""
+    scheme, _, rest = address.partition("://")
+    host, _, port = rest.rpartition(":")
+    if not rest or (scheme == "tcp" and not (host and port.isdigit())):
+        raise ValueError(f"{source} {address}: expected a scheduler's address, tcp://HOST:PORT")
+    if scheme != "tcp":
+        return
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=REACH_TIMEOUT_S).close()
+    except OSError as error:
+        why = f"no answer within {REACH_TIMEOUT_S:g} s" if isinstance(error, TimeoutError) else error.strerror
+        raise ValueError(
+            f"{source} {address}: no Dask scheduler there ({(why or str(error)).lower()}): start one "
+            f"(`dask scheduler --port {port}` on {host}) and its workers, or leave out {source} for a cluster on this "
+            "machine"
+        ) from None
 
 
 def add_cluster_arguments(parser) -> None:

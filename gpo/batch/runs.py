@@ -9,14 +9,12 @@ import contextlib
 import hashlib
 import json
 import math
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import cv2
-import yaml
 from distributed import get_worker
 
 from gpo.io import cache
@@ -24,8 +22,9 @@ from gpo.io.bag import Recording
 from gpo.io.fingerprint import PACKAGE_ROOT, sources
 from gpo.io.trajectory import Trajectory
 from gpo.metrics import evaluate
-from gpo.pipeline.config import OdometryConfig, config_to_dict, load_config
+from gpo.pipeline.config import DEFAULT_CONFIG, OdometryConfig, config_from, config_to_dict, load_config
 from gpo.pipeline.run import run
+from gpo.pipeline.schema import check_config
 
 TRUTH_TOPIC = "/mocap/base_link"  # the simulator's ground truth; a spec names its own for other recordings
 
@@ -53,16 +52,15 @@ def configured(run_: Run) -> OdometryConfig:
     """The run's config: its file (or the default) with its overrides applied to the YAML document and read again
     through ``load_config``'s one schema. Raises ValueError naming the override that is refused or that the config
     does not read (e.g. ``mount.pitch_deg``, written for people, while the mount is read from its quaternion)."""
-    base = load_config(None if run_.config is None else Path(run_.config).resolve())
+    path = None if run_.config is None else Path(run_.config).resolve()
+    base = load_config(path)
     if not run_.overrides:
         return base
     document = config_to_dict(base)
     for key, value in run_.overrides.items():
         _set(document, key, value)
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "config.yaml"
-        path.write_text(yaml.safe_dump(document, sort_keys=False))
-        config = load_config(path)
+    where = f"{run_.config or 'the default config'} with {', '.join(run_.overrides)} changed"
+    config = config_from(check_config(document, where), path or Path(DEFAULT_CONFIG), where)
     read_back = config_to_dict(config)
     for key, value in run_.overrides.items():
         if not _same(_get(read_back, key), value):

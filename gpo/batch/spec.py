@@ -12,7 +12,7 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from gpo.batch.runs import TRUTH_TOPIC, Run
+from gpo.batch.runs import TRUTH_TOPIC, Run, configured
 
 
 class _Strict(BaseModel):
@@ -90,13 +90,26 @@ class SweepSpec(_Strict):
                 for seed in source.seeds or [None]:
                     label = source.preset if seed is None else f"{source.preset}@{seed}"
                     recordings.append((str((preset_paths or {})[(source.preset, seed)]), label))
-        grid = [dict(zip(self.vary, values, strict=True)) for values in itertools.product(*self.vary.values())]
-        overrides = [{**self.set, **entry, **point} for entry in self.runs for point in grid]
         return [
             Run(path, label, self.config, changes, self.truth_topic, self.topic)
             for path, label in recordings
-            for changes in overrides
+            for changes in self.overrides()
         ]
+
+    def overrides(self) -> list[dict[str, Any]]:
+        """The changes of each run of a recording: ``set``, then a ``runs`` entry, then a point of the ``vary`` grid."""
+        grid = [dict(zip(self.vary, values, strict=True)) for values in itertools.product(*self.vary.values())]
+        return [{**self.set, **entry, **point} for entry in self.runs for point in grid]
+
+    def check_configs(self, where) -> None:
+        """Every run's config made once (``configured``) before any run: a ValueError naming ``where`` (the spec's
+        file) and the key of ``set``, ``vary`` or ``runs`` that the config refuses, so that a wrong key stops the
+        sweep before its cluster starts rather than failing every run."""
+        for changes in self.overrides():
+            try:
+                configured(Run("", "", self.config, changes))
+            except ValueError as error:
+                raise ValueError(f"{where}: {error}") from None
 
 
 def load_spec(path) -> SweepSpec:

@@ -90,9 +90,10 @@ from gpo.cameras.chessboard import (
     check_pattern_size,
     find_corners,
     forms_grid,
+    pattern_hint,
     pattern_text,
     planar_pose,
-    smaller_pattern_hint,
+    whole_board,
 )
 from gpo.cameras.eucm import EUCM
 from gpo.cameras.files import Camera
@@ -248,15 +249,30 @@ def calibrate_views(
         if corners is None:
             dropped[index] = f"no chessboard of {pattern} inner corners found"
         else:
+            if not observed:  # the first view with the pattern: is it the whole board?
+                _check_whole_board(image, names[index], board)
             observed[index] = corners
     if not observed:
         raise CalibrationError(
             f"no chessboard of {pattern} inner corners (per row x per column) found in any of the "
             f"{len(images)} images. Is the pattern size right? It counts inner corners, where four squares "
             f"meet: a board of 8 x 6 squares has 7 x 5 inner corners."
-            f"{smaller_pattern_hint(images[0], board.pattern_size, names[0])}"
+            f"{pattern_hint(list(images), board.pattern_size, names)}"
         )
     return _calibrate(observed, dropped, names, board, (width, height), model, fix_k3)
+
+
+def _check_whole_board(image: np.ndarray, name: str, board: Chessboard) -> None:
+    """Raise ``CalibrationError`` when the board in ``image`` (named ``name``, one where the pattern was found) has
+    more inner corners than ``board``: the corners found are then a part of it, a different part in each view, and
+    the fit of such parts is wrong, its focal length several times off."""
+    found = whole_board(image, board.pattern_size)
+    if found is not None and found[0] * found[1] > board.pattern_size[0] * board.pattern_size[1]:
+        given, whole = pattern_text(board.pattern_size), pattern_text(found)
+        raise CalibrationError(
+            f"{name} shows a board of {whole} inner corners, more than the {given} given: give --board {whole} (the "
+            "whole board's inner corners per row x per column; a part of a board gives a wrong calibration)"
+        )
 
 
 def calibrate_corners(

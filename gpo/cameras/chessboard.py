@@ -226,20 +226,45 @@ def pattern_text(pattern_size: tuple[int, int]) -> str:
     return f"{pattern_size[0]}x{pattern_size[1]}"
 
 
-def smaller_pattern_hint(image: np.ndarray, pattern_size: tuple[int, int], name: str) -> str:
-    """A hint, or "", when ``image`` (named ``name``) shows a pattern one inner corner smaller each way than
-    ``pattern_size``: either the squares were counted for the corners, or the board is partly hidden (and that pattern
-    is a part of it, which must not be calibrated)."""
-    per_row, per_column = pattern_size
-    smaller = per_row - 1, per_column - 1
-    if min(smaller) >= 3 and _find_in_picture(_checked_grey(image, None), smaller, CALIBRATION) is not None:
-        given, found = pattern_text(pattern_size), pattern_text(smaller)
+def whole_board(image: np.ndarray, pattern_size: tuple[int, int] = (3, 3)) -> tuple[int, int] | None:
+    """The inner corners (per row, per column, in the order of ``pattern_size``: the longer first if it is) of the
+    whole board in ``image`` that holds at least ``pattern_size``, or None where none is found in the image itself.
+
+    The sector detector with ``cv2.CALIB_CB_LARGER`` grows the pattern found to every corner of the board it lies on:
+    a ``pattern_size`` smaller than the board is told apart from the board itself. A board cut off by the image's
+    edge gives the part in view."""
+    grey = _checked_grey(image, None)
+    found, _, meta = cv2.findChessboardCornersSBWithMeta(grey, pattern_size, CALIBRATION.flags | cv2.CALIB_CB_LARGER)
+    if not found or meta is None:
+        return None
+    longer, shorter = max(meta.shape), min(meta.shape)
+    return (longer, shorter) if pattern_size[0] >= pattern_size[1] else (shorter, longer)
+
+
+def pattern_hint(images: list[np.ndarray], pattern_size: tuple[int, int], names: list[str], looks: int = 2) -> str:
+    """A hint, or "", when no board of ``pattern_size`` was found in ``images`` (named ``names``): the board that is in
+    view, the largest ``whole_board`` finds in the first ``looks`` of them. Larger than ``pattern_size``: give its
+    size. Smaller: either the squares were counted for the corners, or the board is partly hidden (and that part must
+    not be calibrated)."""
+    seen = []
+    for seed in (pattern_size, (3, 3)):  # the given pattern grows to its board; a smaller one finds one smaller
+        seen = [(size, name) for image, name in zip(images[:looks], names, strict=False)
+                if (size := whole_board(image, seed)) is not None]
+        if seen:
+            break
+    if not seen:
+        return ""
+    (found, name), given = max(seen, key=lambda item: item[0][0] * item[0][1]), pattern_text(pattern_size)
+    if found[0] >= pattern_size[0] and found[1] >= pattern_size[1]:
         return (
-            f" {name} shows a pattern of {found} inner corners: if {given} counted the board's squares, give "
-            f"--board {found}; if {given} is right, the board is partly hidden or cut off in the "
-            "views, and a part of it gives a wrong calibration"
+            f" {name} shows a board of {pattern_text(found)} inner corners: give --board {pattern_text(found)} (a part "
+            "of a board gives a wrong calibration)"
         )
-    return ""
+    return (
+        f" {name} shows a board of {pattern_text(found)} inner corners, or part of one: if {given} counted the board's "
+        f"squares, give --board {pattern_text(found)}; if {given} is right, the board is partly hidden or cut off in "
+        "the views, and a part of it gives a wrong calibration"
+    )
 
 
 def _checked_grey(image: np.ndarray, camera: CameraModel | None) -> np.ndarray:

@@ -103,15 +103,20 @@ def _kalibr_entry(camera: Camera, model: str, intrinsics: list, distortion: str,
     }
 
 
-def save_kalibr(path, cameras: Mapping[str, Camera], rostopics: Mapping[str, str] | None = None) -> Path:
-    """Write ``cameras`` (name -> camera) as a Kalibr camchain YAML; ``rostopics`` maps name -> topic."""
+def save_kalibr(
+    path, cameras: Mapping[str, Camera], rostopics: Mapping[str, str] | None = None, comments: Sequence[str] = ()
+) -> Path:
+    """Write ``cameras`` (name -> camera) as a Kalibr camchain YAML; ``rostopics`` maps name -> topic; ``comments``
+    are lines written first, each as a YAML comment (what a reader should know, such as a flagged calibration's
+    warnings)."""
     document = {}
     for name, camera in cameras.items():
         document[name] = camera_to_kalibr(camera, name)
         if rostopics and name in rostopics:
             document[name]["rostopic"] = rostopics[name]
     path = Path(path)
-    path.write_text(yaml.safe_dump(document, sort_keys=False, default_flow_style=None))
+    header = "".join(f"# {line}\n" for comment in comments for line in comment.splitlines())
+    path.write_text(header + yaml.safe_dump(document, sort_keys=False, default_flow_style=None))
     return path
 
 

@@ -69,7 +69,7 @@ taken along base x. Height, pitch and roll do not depend on this choice.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -402,6 +402,12 @@ def _rms_warning(rms: float, limit: float) -> str:
     )
 
 DOWNWARD_BELOW_DEG = 45.0
+"""A camera whose optical axis lies within this many degrees of straight down looks ``downward``, else ``forward``."""
+HEIGHT_RANGE_M = {"forward": (0.03, 1.0), "downward": (0.03, 0.6)}
+"""The heights a floor camera of each kind sits at on a real robot, metres: looking ahead, from a few centimetres (the
+first paper's pallet robot carries its T265 at 0.12 m) to a tall platform's metre; looking down, under or beside a
+robot's body (the second paper's AGV, about 0.25 m). One image cannot tell a board's scale: a height outside these is
+most often a board's square size given ten times too large or too small, and the mount is flagged."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -422,8 +428,11 @@ def measure(
 
     ``at``: (x m, y m, yaw rad) of the board frame's origin in base_link, or None. ``kind``: ``forward``,
     ``downward`` or ``auto`` (``downward`` when the optical axis is within ``DOWNWARD_BELOW_DEG`` of straight
-    down). Raises ``MountError`` when the board is not found, is found twice, or no mount fits.
+    down); a kind the measured tilt contradicts is a ``MountError`` too. A height outside the kind's
+    ``HEIGHT_RANGE_M`` is a warning of the estimate: the mount is flagged.
     """
+    if kind != "auto":
+        _check_kind(kind)
     if image.shape[:2] != (camera.height, camera.width):
         raise MountError(
             f"the image is {image.shape[1]} x {image.shape[0]} pixels but the camera calibration is "
@@ -436,23 +445,40 @@ def measure(
     _check_whole_board(image, camera, board, rectify)
     _check_found_once(image, camera, board, corners, rectify)
     estimate = mount_from_corners(corners, camera, board, at, "forward")
-    if kind == "auto":
-        kind = "downward" if _looks_down(estimate) else "forward"
-    if kind != "forward":
-        estimate = mount_from_corners(corners, camera, board, at, kind)
+    seen = "downward" if _looks_down(estimate) else "forward"
+    if kind not in ("auto", seen):
+        raise MountError(
+            f"the camera's optical axis lies {_from_down_deg(estimate):.0f} deg from straight down, so it looks "
+            f"{seen} (a downward camera's axis lies within {DOWNWARD_BELOW_DEG:g} deg of it), not {kind}: give kind "
+            f"'{seen}' or 'auto'"
+        )
+    if seen != "forward":
+        estimate = mount_from_corners(corners, camera, board, at, seen)
     if estimate.height_m <= 0:
         raise MountError(f"the camera comes out {estimate.height_m:.3f} m above the floor: not a board on the floor")
+    low, high = HEIGHT_RANGE_M[seen]
+    if not low <= estimate.height_m <= high:
+        estimate = replace(estimate, warnings=(*estimate.warnings, (
+            f"the camera comes out {estimate.height_m:.3f} m above the floor, where a {seen}-looking floor camera "
+            f"sits {low:g} to {high:g} m up: check the board's square size, whose scale one image cannot tell (a "
+            "square ten times too large puts the camera ten times too high)"
+        )))
     if estimate.mount is not None:
         return MeasuredMount(estimate, estimate.mount, True)
-    level = CameraMount.forward if kind == "forward" else CameraMount.downward
-    angles = (estimate.pitch_rad, estimate.roll_rad) if kind == "forward" else (estimate.roll_rad, estimate.pitch_rad)
+    level = CameraMount.forward if seen == "forward" else CameraMount.downward
+    angles = (estimate.pitch_rad, estimate.roll_rad) if seen == "forward" else (estimate.roll_rad, estimate.pitch_rad)
     return MeasuredMount(estimate, level(0.0, 0.0, estimate.height_m, *angles), False)
 
 
 def _looks_down(estimate: MountEstimate) -> bool:
     """Whether the optical axis (camera z) lies within ``DOWNWARD_BELOW_DEG`` of the floor's downward normal."""
+    return _from_down_deg(estimate) < DOWNWARD_BELOW_DEG
+
+
+def _from_down_deg(estimate: MountEstimate) -> float:
+    """The angle between the optical axis (camera z) and the floor's downward normal, degrees."""
     up_in_camera = estimate.board_in_camera[0].apply([0.0, 0.0, 1.0])
-    return -up_in_camera[2] > np.cos(np.radians(DOWNWARD_BELOW_DEG))
+    return float(np.degrees(np.arccos(np.clip(-up_in_camera[2], -1.0, 1.0))))
 
 
 def _check_whole_board(image: np.ndarray, camera: Camera, board: Chessboard, rectify: bool | None) -> None:

@@ -45,13 +45,19 @@ def main_calibrate(
     Calibrates ``model`` from the image files, prints the summary and writes ``out`` as a Kalibr
     camchain (``cam0``), through a temporary name. Kalibr's radtan has no k3, so the pinhole is fitted
     with k3 = 0 here. The file is written even when the fit is not good; the summary then says so and
-    why, ``result.ok`` is false (the command should exit non-zero), and a file already at ``out`` is
-    kept unless ``force``: the fit goes beside it (``gpo.io.outputs.destination``).
+    why, ``result.ok`` is false (the command should exit non-zero), the file says so too in its first
+    lines (comments: "flagged", then each warning), and a file already at ``out`` is kept unless
+    ``force``: the fit goes beside it (``gpo.io.outputs.destination``).
     """
     result = calibrate_images(images, parse_board(board), square, model, progress=True, fix_k3=model == "pinhole")
     print(result.summary())
     path = destination(out, flagged=not result.ok, force=force)
     if path != Path(out):
         print(f"{out} is kept: this fit is not a good calibration (--force replaces it)")
-    print(f"wrote {write_with(path, lambda temporary: save_kalibr(temporary, {'cam0': result.camera}))}")
+    flags = [] if result.ok else [
+        f"flagged by gpo calibrate: NOT A GOOD CALIBRATION ({result.summary().splitlines()[0]})",
+        *(f"WARNING: {warning}" for warning in result.warnings),
+    ]
+    written = write_with(path, lambda temporary: save_kalibr(temporary, {"cam0": result.camera}, comments=flags))
+    print(f"wrote {written}")
     return result

@@ -29,9 +29,6 @@ from gpo.cli.common import positive
 from gpo.io.outputs import check_output, destination, flagged_path, write_text, write_with
 from gpo.pipeline.schema import load_camera
 
-"""With ``kind="auto"``, a camera whose optical axis lies within this many degrees of straight down is ``downward``."""
-
-
 GRID_STEP_M = 0.05
 
 
@@ -59,7 +56,10 @@ def add_arguments(parser) -> None:
         "--at", nargs=3, type=float, metavar=("X", "Y", "YAW"),
         help="the board's outer corner in base_link (m) and its x axis's yaw (degrees): then x, y, yaw are measured",
     )
-    parser.add_argument("--kind", default="auto", choices=("auto", "forward", "downward"))
+    parser.add_argument(
+        "--kind", default="auto", choices=("auto", "forward", "downward"),
+        help="how the camera looks at the floor (default: auto, from the measured tilt, which a kind given must match)",
+    )
     parser.add_argument("--out", type=Path, default=Path("mount.yaml"), help="mount YAML to write")
     parser.add_argument("--picture", type=Path, help="PNG of the board and floor grid (default: beside --out)")
     parser.add_argument("--force", action="store_true", help="a flagged mount replaces --out too")
@@ -208,10 +208,12 @@ def run(args) -> int:
 
 
 def _hint(error: MountError) -> str:
-    """What to check when the board was not found."""
+    """What to check when the board was not found, or the kind given is not the one measured."""
     if "not found" in str(error):
         return (
             "; check --board (the inner corners per row x per column: a board of 8 x 6 squares is 7x5), that the "
             "whole board is in view and sharp, and that --camera is this camera's calibration"
         )
+    if "give kind" in str(error):
+        return " (--kind)"
     return ""

@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 from gpo.cli.common import INTERRUPTED, available_cores, whole_number
-from gpo.io.bag_writer import copy_with_trajectory
+from gpo.io.bag import recording_format
+from gpo.io.bag_writer import check_new_bag, copy_with_trajectory
 from gpo.io.outputs import check_output, destination, write_with
 from gpo.pipeline.config import VECTORS, load_config, methods
 from gpo.pipeline.propose import config_from_bag
@@ -74,8 +75,7 @@ def run(args) -> int:
     check_output(args.out, inputs, "--out")
     check_output(summary_path_of(args.out), inputs, "--out (its summary)")
     if args.write_bag:
-        if args.write_bag.exists():
-            raise ValueError(f"--write-bag {args.write_bag} exists; name a new bag (a bag is never replaced)")
+        check_new_bag(args.write_bag, recording_format(args.bag), f"--write-bag (a copy of {args.bag})")
         outputs = [*inputs, args.out, summary_path_of(args.out)]
         check_output(args.write_bag, outputs, "--write-bag", needed_bytes=_bytes(args.bag))
     try:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from gpo.io.bag_writer import check_new_bag
 from gpo.io.outputs import check_output, write_with
 
 NAME = "simulate"
@@ -20,10 +21,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    if args.out.exists():
-        raise ValueError(f"--out {args.out} exists; name a new bag (a bag is never replaced)")
-    if (args.format == "ros1") != (args.out.suffix == ".bag"):
-        raise ValueError(f"--out {args.out}: a ros1 bag is one file named *.bag, a ros2 bag a folder not so")
+    check_new_bag(args.out, args.format, "--out")
     check_output(args.out)
     from gpo.sim.record import PRESETS, simulate
 

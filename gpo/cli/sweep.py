@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gpo.batch.cluster import add_cluster_arguments
+from gpo.io.outputs import check_output_folder
 from gpo.pipeline.config import load_config
 
 NAME = "sweep"
@@ -18,7 +19,8 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    """The spec's presets rendered on the cluster (cached), then every run; the summary."""
+    """Everything checked (the spec, its configs, the presets, ``--out``, ``--workers``, the scheduler's address)
+    before the cluster starts; the spec's presets rendered on the cluster (cached), then every run; the summary."""
     from gpo.batch.cluster import cluster_client
     from gpo.batch.spec import load_spec
     from gpo.batch.sweep import sweep
@@ -27,7 +29,9 @@ def run(args) -> int:
     from gpo.sim.record import preset
 
     spec = load_spec(args.spec)
+    check_output_folder(args.out, [args.spec, spec.config], "--out")
     load_config(spec.config)  # a base config that cannot be read stops the sweep before it starts
+    spec.check_configs(args.spec)
     for name, _ in spec.presets():
         preset(name)
     if args.workers is not None and args.workers < 1:

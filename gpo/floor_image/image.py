@@ -50,6 +50,9 @@ class GroundImageError(ValueError):
 FLOOR_X_RANGE_M = (0.70, 0.90)
 FLOOR_Y_RANGE_M = (-0.10, 0.10)
 FLOOR_METRES_PER_PIXEL = 1e-3
+MAX_FLOOR_PIXELS = 16_000_000
+"""The largest floor image, pixels (4000 x 4000; its remap table alone is 128 MB): the KLT tracks a few hundred
+pixels a side, and a wider extent or finer pixel is a mistake that would otherwise ask for terabytes."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,6 +102,12 @@ class FloorImage:
                 f"got x_range={x_range}, y_range={y_range}"
             )
         width, height = round((left - right) / step), round((far - near) / step)
+        if width * height > MAX_FLOOR_PIXELS:
+            raise GroundImageError(
+                f"x_range {list(x_range)} m and y_range {list(y_range)} m at {step:g} metres_per_pixel make a floor "
+                f"image of {width} x {height} pixels, over the {MAX_FLOOR_PIXELS} allowed: give a larger "
+                "metres_per_pixel or a smaller extent"
+            )
         affine = [[0.0, -step, far - 0.5 * step], [-step, 0.0, left - 0.5 * step]]
         return cls(width, height, np.array(affine))
 

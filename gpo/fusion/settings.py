@@ -9,6 +9,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from gpo.fusion.ekf import BiasModel, ProcessNoise
+from gpo.motion.ranges import REACH_M, check_rules, in_range
 
 
 @dataclass(frozen=True)
@@ -20,11 +21,15 @@ class TrackingMount:
     rpy_deg: tuple[float, float, float]
 
     def __post_init__(self):
-        for name in ("position_m", "rpy_deg"):
+        ranges = {"position_m": (-REACH_M, REACH_M, " m"), "rpy_deg": (-360, 360, " deg")}
+        for name, (low, high, unit) in ranges.items():
             values = getattr(self, name)
             if np.shape(values) != (3,) or not np.isfinite(np.asarray(values, dtype=float)).all():
                 raise ValueError(f"fusion.tracking_mount.{name} must be 3 finite numbers, got {values!r}")
             object.__setattr__(self, name, tuple(float(v) for v in values))
+            if not all(in_range(value, low, high)[0] for value in getattr(self, name)):
+                raise ValueError(f"fusion.tracking_mount.{name} must be 3 numbers from {low} to {high}{unit}, "
+                                 f"got {values!r}")
 
     @property
     def transform(self) -> tuple[Rotation, np.ndarray]:
@@ -80,9 +85,26 @@ class FusionSettings:
                     f"fusion.tracking_mount needs position_m and rpy_deg, got {', '.join(sorted(self.tracking_mount))}"
                 )
             object.__setattr__(self, "tracking_mount", TrackingMount(**self.tracking_mount))
-        for name, value in vars(self).items():
-            if isinstance(value, float) and not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"fusion.{name} must be a finite number >= 0, got {value!r}")
+        check_rules(self._ranges(), self)
+
+    def _ranges(self) -> dict[str, tuple[bool, str]]:
+        """Each number: whether it lies in the range a real rig's sensors have, and that range with its unit. The
+        tracking camera's walks reach 5 m/sqrt(s) and 1 rad/sqrt(s): chapter 07's camera that is not to be trusted."""
+        sigma = {"floor_speed_sigma_mps": " m/s", "floor_turn_sigma_radps": " rad/s", "tracking_jitter_m": " m",
+                 "tracking_jitter_rad": " rad", "tracking_scale_sigma": ", a share of the distance",
+                 "tracking_yaw_bias_sigma_radps": " rad/s", "tracking_scale_walk_per_sqrt_s": " per sqrt(s)",
+                 "tracking_yaw_bias_walk_radps_per_sqrt_s": " rad/s per sqrt(s)"}
+        walks = {"tracking_position_walk_m_per_sqrt_s": " m/sqrt(s)",
+                 "tracking_yaw_walk_rad_per_sqrt_s": " rad/sqrt(s)"}
+        return {
+            **{name: in_range(getattr(self, name), 0, 1, unit) for name, unit in sigma.items()},
+            **{name: in_range(getattr(self, name), 0, 10, unit) for name, unit in walks.items()},
+            "floor_reference_inliers": in_range(self.floor_reference_inliers, 1, 10_000, " vectors", whole=True),
+            "floor_reference_spread_px": in_range(self.floor_reference_spread_px, 0, 100, " px", low_open=True),
+            "tracking_max_gap_s": in_range(self.tracking_max_gap_s, 0, 60, " s", low_open=True),
+            "accel_mps2": in_range(self.accel_mps2, 0, 100, " m/s^2 per sqrt(Hz)"),
+            "angular_accel_radps2": in_range(self.angular_accel_radps2, 0, 100, " rad/s^2 per sqrt(Hz)"),
+        }
 
     @property
     def bias_model(self) -> BiasModel:

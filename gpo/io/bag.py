@@ -391,6 +391,12 @@ def describe(path) -> str:
 
 
 
+def recording_format(path) -> str:
+    """The format of the recording at ``path`` (``ros1``, ``ros2-sqlite3`` or ``ros2-mcap``), without reading it;
+    an error naming ``path`` when it is not a recording."""
+    return _locate(Path(path))[0]
+
+
 def _locate(path: Path) -> tuple[str, Path]:
     """The format of the recording at ``path`` and the path to open it by."""
     if not path.exists():
@@ -465,6 +471,14 @@ def _trajectory(poses: list, context: str) -> Trajectory:
     if len(frame_pairs) > 1:
         raise ValueError(f"{context}: the poses change frames, (frame, child) = {frame_pairs}; expected one pair")
     stamps = np.array(stamps, dtype=np.int64)
+    finite = np.isfinite(np.hstack([np.array(positions, dtype=float), np.array(quaternions, dtype=float)])).all(axis=1)
+    if not finite.all():
+        first = int(np.argmin(finite))
+        raise ValueError(
+            f"{context}: {np.count_nonzero(~finite)} of {len(finite)} poses hold NaN or infinite numbers, the first at "
+            f"message {first + 1}, stamp {stamps[first] // NS_PER_S}.{stamps[first] % NS_PER_S:09d} s; expected finite "
+            "positions and orientations"
+        )
     order = np.argsort(stamps, kind="stable")
     backwards = np.flatnonzero(np.diff(stamps) < 0)
     if backwards.size:

@@ -67,6 +67,36 @@ _STATIC_TF_QOS = Qos(
 """The QoS that tf2_ros's static broadcaster offers: late subscribers still get /tf_static."""
 
 
+ROS2_FILE_SUFFIXES = (".db3", ".mcap")
+"""The storage files inside a ROS2 bag's folder: a folder named so would read as one of them."""
+
+
+def check_bag_name(path, format: str, option: str = "") -> Path:
+    """``path`` checked to name a bag of ``format`` (``WRITE_FORMATS``): a ros1 bag is one file named *.bag, a ros2
+    bag a folder named neither *.bag nor *.db3 or *.mcap; a ValueError naming ``path`` (after ``option``, e.g.
+    "--out") otherwise."""
+    path = Path(path)
+    if format not in WRITE_FORMATS:
+        raise ValueError(f"unknown bag format {format!r}: expected one of {', '.join(WRITE_FORMATS)}")
+    if format == "ros1" and path.suffix != ".bag":
+        raise ValueError(f"{option} {path}: a ros1 bag is one file named *.bag: name it {path.stem}.bag, say".lstrip())
+    if format != "ros1" and path.suffix in (".bag", *ROS2_FILE_SUFFIXES):
+        raise ValueError(
+            f"{option} {path}: a {format} bag is a folder, named neither *.bag nor *.db3 or *.mcap (the storage file "
+            f"inside it is): name it {path.stem}, say".lstrip()
+        )
+    return path
+
+
+def check_new_bag(path, format: str, option: str) -> Path:
+    """``path`` checked to name a new bag of ``format`` (``check_bag_name``) that is not there yet: a bag is never
+    replaced; a ValueError naming ``option`` and ``path`` otherwise."""
+    path = Path(path)
+    if path.exists():
+        raise ValueError(f"{option} {path} exists; name a new bag (a bag is never replaced)")
+    return check_bag_name(path, format, option)
+
+
 class BagWriter:
     """A new bag, open for writing; a context manager that finishes it.
 
@@ -78,10 +108,7 @@ class BagWriter:
 
     def __init__(self, path, format: str = "ros1"):
         self.path = Path(path)
-        if format not in WRITE_FORMATS:
-            raise ValueError(f"unknown bag format {format!r}: expected one of {', '.join(WRITE_FORMATS)}")
-        if (format == "ros1") != (self.path.suffix == ".bag"):
-            raise ValueError(f"{self.path}: a ros1 bag is one file named *.bag, a ros2 bag a folder not named so")
+        check_bag_name(self.path, format)
         if self.path.exists():
             raise FileExistsError(f"{self.path} exists; a BagWriter only creates new bags")
         self.format = format

@@ -130,10 +130,18 @@ class Trajectory:
 
     @classmethod
     def read_tum(cls, path, frame_id: str = "world", child_frame_id: str = "base_link") -> Trajectory:
-        """Read a TUM file (8 numbers a line; ``#`` comments and blank lines skipped)."""
+        """Read a TUM file (8 numbers a line; ``#`` comments and blank lines skipped). Errors name the file and the
+        line, counted from 1 as editors count them: a line that is not 8 numbers, a number that is not finite, a
+        quaternion of zero length, a stamp before the one above it. A file that is not text (a bag, say) is named
+        as such."""
         path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise ValueError(f"{path} is {_what_it_is(path)}, not a TUM text file: expected one pose a line, "
+                             "t tx ty tz qx qy qz qw, as gpo run --out writes") from None
         stamps, values = [], []
-        for number, line in enumerate(path.read_text().splitlines(), start=1):
+        for number, line in enumerate(text.splitlines(), start=1):
             line = line.strip()
             if not line or line.startswith("#"):
                 continue
@@ -143,12 +151,35 @@ class Trajectory:
                     f"{path}:{number}: a TUM line has 8 numbers (t tx ty tz qx qy qz qw), got {len(fields)}"
                 )
             try:
-                stamps.append(_seconds_text_to_ns(fields[0]))
-                values.append([float(v) for v in fields[1:]])
+                stamp, pose = _seconds_text_to_ns(fields[0]), [float(v) for v in fields[1:]]
             except ValueError:
                 raise ValueError(f"{path}:{number}: not a number in {line!r}") from None
+            problem = _pose_problem(pose, stamp, stamps[-1] if stamps else None)
+            if problem:
+                raise ValueError(f"{path}:{number}: {line!r}: {problem}")
+            stamps.append(stamp)
+            values.append(pose)
         values = np.array(values).reshape(-1, 7)
         return cls(np.array(stamps, dtype=np.int64), values[:, :3], values[:, 3:], frame_id, child_frame_id)
+
+
+def _pose_problem(pose: list[float], stamp_ns: int, previous_ns: int | None) -> str:
+    """What is wrong with a TUM line's pose (tx ty tz qx qy qz qw) and stamp after the stamp above it; "" if nothing."""
+    if not np.isfinite(pose).all():
+        return "positions and quaternions must be finite numbers"
+    if np.linalg.norm(pose[3:]) < 1e-9:
+        return "the quaternion (qx qy qz qw) has zero length; expected a rotation, e.g. 0 0 0 1"
+    if previous_ns is not None and stamp_ns < previous_ns:
+        return "the stamps go backwards (this one is before the one above it); expected the poses in time order"
+    return ""
+
+
+def _what_it_is(path: Path) -> str:
+    """What a file that is not UTF-8 text is: "a ROS bag" when it starts as one or is named so, else "binary data"."""
+    with path.open("rb") as file:
+        start = file.read(16)
+    bag = start.startswith((b"#ROSBAG", b"SQLite format 3", b"\x89MCAP")) or path.suffix in (".bag", ".db3", ".mcap")
+    return "a ROS bag" if bag else "binary data"
 
 
 def _seconds_text_to_ns(text: str) -> int:

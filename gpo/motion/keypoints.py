@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from gpo.motion.ranges import in_range
+from gpo.motion.ranges import MAX_IMAGE_PX, OutOfRange, check_rules, in_range
 
 DETECTORS = ("orb", "sift")
 
@@ -71,12 +71,12 @@ class FeatureError(ValueError):
     """An image, a mask or a parameter the feature odometer cannot use."""
 
 
+class FeatureParametersOutOfRange(OutOfRange, FeatureError):
+    """``FeatureParameters`` outside their ranges, each named (``gpo.motion.ranges.OutOfRange``)."""
+
+
 def _whole(value, lowest: int) -> bool:
     return isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= lowest
-
-
-def _real(value) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 @dataclass(frozen=True)
@@ -119,9 +119,7 @@ class FeatureParameters:
     def __post_init__(self):
         if isinstance(self.roi, list):  # as YAML gives it
             object.__setattr__(self, "roi", tuple(self.roi))
-        for name, (ok, expected) in self._rules().items():
-            if not ok:
-                raise FeatureError(f"{name} must be {expected}, got {getattr(self, name)!r}")
+        check_rules(self._rules(), self, FeatureParametersOutOfRange)
 
     def _rules(self) -> dict[str, tuple[bool, str]]:
         """Each field: (whether its value is allowed, what is expected)."""
@@ -129,26 +127,27 @@ class FeatureParameters:
         roi_ok = roi is None or (
             isinstance(roi, tuple)
             and len(roi) == 4
-            and all(_whole(value, 0) for value in roi)
+            and all(in_range(value, 0, MAX_IMAGE_PX, whole=True)[0] for value in roi)
             and min(roi[2:]) >= MIN_ROI_PX
         )
+        cardinality_ok, cardinality = in_range(self.cardinality, 3, 10_000, " matches per loop", whole=True)
         flags = ("cross_check", "histogram_filter", "invariance_check")
         return {
             "detector": (self.detector in DETECTORS, f"one of {', '.join(map(repr, DETECTORS))}"),
             "max_features": in_range(self.max_features, 1, 100_000, " keypoints", whole=True),
             "contrast_threshold": in_range(self.contrast_threshold, 0, 1, " (SIFT's)", low_open=True),
             "fast_threshold": in_range(self.fast_threshold, 1, 255, " grey levels (ORB's FAST)", whole=True),
-            "scale": (_real(self.scale) and 0 < self.scale <= 1, "a number in (0, 1]"),
-            "roi": (roi_ok, f"None or (u, v, width, height), whole pixels, width and height >= {MIN_ROI_PX}"),
-            "ratio": (_real(self.ratio) and 0 < self.ratio <= 1, "a number in (0, 1] (1: no ratio test)"),
+            "scale": in_range(self.scale, 0, 1, ", the image's resize factor", low_open=True),
+            "roi": (
+                roi_ok,
+                f"None or (u, v, width, height), whole pixels up to {MAX_IMAGE_PX}, width and height >= {MIN_ROI_PX}",
+            ),
+            "ratio": in_range(self.ratio, 0, 1, " (1: no ratio test)", low_open=True),
             **{name: (isinstance(getattr(self, name), bool), "True or False") for name in flags},
             "orientation_bins": in_range(self.orientation_bins, 1, 3600, " bins", whole=True),
             "length_bins": in_range(self.length_bins, 1, 10_000, " bins", whole=True),
-            "invariance_threshold": (
-                _real(self.invariance_threshold) and 0 < self.invariance_threshold <= 1,
-                "a number in (0, 1]",
-            ),
-            "cardinality": (self.cardinality is None or _whole(self.cardinality, 3), "None or a whole number >= 3"),
+            "invariance_threshold": in_range(self.invariance_threshold, 0, 1, ", a side ratio", low_open=True),
+            "cardinality": (self.cardinality is None or cardinality_ok, f"None or {cardinality}"),
             "rounds": in_range(self.rounds, 1, 100_000, " loops", whole=True),
             "min_matches": in_range(self.min_matches, 2, 100_000, " matches", whole=True),
             "refit_px": in_range(self.refit_px, 0, 100, " px (0: no refit)"),

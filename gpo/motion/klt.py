@@ -38,7 +38,7 @@ import numpy as np
 from gpo.motion.layers import slower_count, slower_layer
 from gpo.motion.median import median_of
 from gpo.motion.overview import Overview, disagrees
-from gpo.motion.ranges import in_range
+from gpo.motion.ranges import check_rules, in_range
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
 
@@ -109,10 +109,7 @@ class KLTParameters:
     overview_min_peak: float = 0.3  # pairs of independent noise images peak at up to 0.11, floors at 0.6-0.9
 
     def __post_init__(self):
-        ranges = self._ranges()
-        bad = [f"{name}={getattr(self, name)!r} ({allowed})" for name, (ok, allowed) in ranges.items() if not ok]
-        if bad:
-            raise ValueError(f"bad KLT parameters: {'; '.join(bad)}")
+        check_rules(self._ranges(), self)
 
     def _ranges(self) -> dict[str, tuple[bool, str]]:
         """Each parameter: whether its value lies in the range a real rig can use, and that range with its unit."""

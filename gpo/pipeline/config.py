@@ -24,7 +24,7 @@ from gpo.motion.keypoints import FeatureParameters
 from gpo.motion.klt import KLTParameters
 from gpo.odometry.estimators import ESTIMATORS, FloorEstimator
 from gpo.odometry.kinematics import PaperBicycle
-from gpo.pipeline.schema import FloorImageSection, read_config, rig_from_config, rig_to_dict
+from gpo.pipeline.schema import ConfigFile, FloorImageSection, read_config, rig_from_config, rig_to_dict
 
 
 class Route(StrEnum):
@@ -125,15 +125,20 @@ class OdometryConfig:
 
 def load_config(path=None) -> OdometryConfig:
     """The run config of a config YAML (checked by ``gpo.pipeline.schema.read_config``) with the sections
-    ``floor_image``,
-    ``klt``, ``kinematics``, ``odometry``, ``fusion`` and ``features``; None loads the shipped default for the
-    simulated T265 rig. Errors name the file and the key."""
+    ``floor_image``, ``klt``, ``kinematics``, ``odometry``, ``fusion`` and ``features``; None loads the shipped
+    default for the simulated T265 rig. Errors name the file and the key."""
     if path is None:
         with resources.as_file(resources.files("gpo") / "configs" / DEFAULT_CONFIG) as default:
             return load_config(default)
     path = Path(path)
-    document = read_config(path)
-    rig = rig_from_config(document, path)
+    return config_from(read_config(path), path)
+
+
+def config_from(document: ConfigFile, path: Path, where: str | None = None) -> OdometryConfig:
+    """The run config of the checked config ``document`` of the file ``path`` (the paths in it are relative to its
+    folder); errors name ``where`` it came from (default: ``path``)."""
+    where = where or str(path)
+    rig = rig_from_config(document, path, where)
     kinematics = document.kinematics
     model = None if kinematics is None else PaperBicycle(kinematics.wheelbase_m, kinematics.rear_to_reference_m)
     odometry = document.odometry.model_dump(exclude_none=True)
@@ -144,7 +149,7 @@ def load_config(path=None) -> OdometryConfig:
             **_route(document.floor_image, path),
         )
     except ValueError as error:
-        raise ValueError(f"{path}: {error}") from None
+        raise ValueError(f"{where}: {error}") from None
 
 
 def config_to_dict(config: OdometryConfig) -> dict:

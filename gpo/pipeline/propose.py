@@ -62,6 +62,9 @@ MIN_LEVER_M = 0.1
 """A region centred nearer than this ahead of the rear axle is read by ``gpo-rigid`` rather than through a lever."""
 STEP_M = 1e-3
 """Footprints are measured over this floor step, metres."""
+HEIGHT_AGREEMENT = 1.5
+"""A mount given beside a bag's /tf_static may put the camera this many times higher or lower than /tf_static does: a
+mount measured on the robot corrects a drawing's by centimetres, not by half its height."""
 
 
 @dataclass
@@ -187,12 +190,15 @@ def chain(tree: dict, parent: str, child: str) -> tuple[Rotation, np.ndarray, li
 
 
 def _mount_of(recording: Recording, frame_id: str, mount_file) -> tuple[CameraMount, str]:
-    """The camera's optical frame in base_link: from ``mount_file`` or else the bag's /tf_static, and its source."""
-    if mount_file is not None:
-        mount = load_mount(mount_file)
-        return check_mount(mount, str(mount_file)), f"--mount {mount_file}"
+    """The camera's optical frame in base_link: from ``mount_file`` or else the bag's /tf_static, and its source. A
+    ``mount_file`` whose height differs from /tf_static's more than ``HEIGHT_AGREEMENT`` times is refused."""
     tree = static_tree(recording)
     found = chain(tree, "base_link", frame_id)
+    if mount_file is not None:
+        mount = check_mount(load_mount(mount_file), str(mount_file))
+        if found is not None:
+            _check_heights_agree(mount, found[1][2], mount_file, recording.path)
+        return mount, f"--mount {mount_file}"
     if found is None:
         held = ", ".join(f"{parent} -> {child}" for child, (parent, _, _) in sorted(tree.items())) or "nothing"
         raise ValueError(
@@ -213,6 +219,18 @@ def check_mount(mount: CameraMount, source: str) -> CameraMount:
             "-> the camera, base_link on the floor with z up (REP-103)"
         )
     return mount
+
+
+def _check_heights_agree(mount: CameraMount, static_height: float, mount_file, bag) -> None:
+    """ValueError when the height of ``mount`` (from ``mount_file``) and the bag's /tf_static height of the camera
+    differ by more than ``HEIGHT_AGREEMENT`` times: a board's square size given wrong to ``gpo mount``, most often."""
+    ratio = mount.height / static_height if static_height > 0 else np.inf
+    if not 1 / HEIGHT_AGREEMENT <= ratio <= HEIGHT_AGREEMENT:
+        raise ValueError(
+            f"--mount {mount_file} puts the camera {mount.height:.3f} m above the floor, {bag}'s /tf_static "
+            f"{static_height:.3f} m: one of them is wrong (gpo mount's height scales with --square, the board's "
+            "square size); measure the mount again, or leave out --mount to take /tf_static's"
+        )
 
 
 def _rate(recording: Recording, count: int) -> float:

@@ -23,10 +23,12 @@
       camera_info: /camera/fisheye1/camera_info
 
 and the run's sections: ``floor_image``, ``klt``, ``kinematics``, ``odometry``, ``fusion``, ``features``
-(``gpo.pipeline.config.load_config``). Every section and key is checked before anything runs: types, ranges, finite
-numbers, and unknown keys at every level (with the nearest known one). The ``klt``, ``fusion`` and ``features``
-sections are the fields of ``KLTParameters``, ``FusionSettings`` and ``FeatureParameters`` themselves, so a field
-added there is a key of the file at once; a key of the other sections is one line of its section below.
+(``gpo.pipeline.config.load_config``). Every section and key is checked before anything runs: types, finite numbers,
+unknown keys at every level (with the nearest known one), and every number against the range a real rig can have,
+with its unit (``gpo.motion.ranges``: one rule, one way of saying it). The ``klt``, ``fusion`` and ``features``
+sections are the fields of ``KLTParameters``, ``FusionSettings`` and ``FeatureParameters`` themselves, which check
+their own ranges, so a field added there is a key of the file at once; a key of the other sections is one line of its
+section below, its range in its type (``ranged``).
 Errors name the file, the key and what is allowed; YAML errors name the line. A document whose aliases would
 expand beyond ``MAX_NODES`` nodes (a "billion laughs") is refused before it is built.
 """
@@ -42,7 +44,7 @@ from typing import Annotated, Any
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from scipy.spatial.transform import Rotation
 
 from gpo.cameras.files import Camera, camera_from_kalibr, camera_to_kalibr, load_basalt, load_kalibr
@@ -51,16 +53,27 @@ from gpo.fusion import FusionSettings
 from gpo.io.outputs import write_text
 from gpo.motion.keypoints import FeatureParameters
 from gpo.motion.klt import KLTParameters
+from gpo.motion.ranges import MAX_IMAGE_PX, REACH_M, OutOfRange, check_value
 
 MAX_BYTES = 1_000_000
 """The largest config file read, bytes."""
 MAX_NODES = 100_000
 """The most YAML nodes a config may hold once its aliases are expanded."""
 
-Positive = Annotated[float, Field(gt=0)]
-NonNegative = Annotated[float, Field(ge=0)]
+
+def ranged(low, high, unit: str = "", whole: bool = False, low_open: bool = False):
+    """A number of the file held to its range on a real rig, ``unit`` and all (``gpo.motion.ranges.check_value``)."""
+    return Annotated[
+        int if whole else float, AfterValidator(lambda value: check_value(value, low, high, unit, whole, low_open))
+    ]
+
+
 Name = Annotated[str, Field(min_length=1)]
-Vector3 = tuple[float, float, float]
+Place = ranged(-REACH_M, REACH_M, " m")  # a coordinate in base_link
+Height = ranged(0, 5, " m above the floor", low_open=True)
+Angle = ranged(-360, 360, " deg")
+Angles = tuple[Angle, Angle, Angle]
+Component = ranged(-1, 1, ", a unit quaternion's component")
 
 
 class Section(BaseModel):
@@ -76,7 +89,7 @@ class CameraSection(Section):
     intrinsics: list[float]
     distortion_model: str = "none"
     distortion_coeffs: list[float] | None = None
-    resolution: tuple[Annotated[int, Field(ge=1)], Annotated[int, Field(ge=1)]]
+    resolution: tuple[ranged(1, MAX_IMAGE_PX, " px", whole=True), ranged(1, MAX_IMAGE_PX, " px", whole=True)]
     rostopic: str | None = None
     cam_overlaps: list[int] | None = None
     T_cam_imu: list[list[float]] | None = None
@@ -89,12 +102,12 @@ class MountSection(Section):
     frame, degrees) or ``quaternion_xyzw`` (its optical frame), or both if they agree (``_mount``); ``height_m``,
     ``pitch_deg`` and ``roll_deg`` are for people and only checked."""
 
-    position_m: Vector3
-    quaternion_xyzw: tuple[float, float, float, float] | None = None
-    rpy_deg: Vector3 | None = None
-    height_m: float | None = None
-    pitch_deg: float | None = None
-    roll_deg: float | None = None
+    position_m: tuple[Place, Place, Height]
+    quaternion_xyzw: tuple[Component, Component, Component, Component] | None = None
+    rpy_deg: Angles | None = None
+    height_m: Height | None = None
+    pitch_deg: Angle | None = None
+    roll_deg: Angle | None = None
 
     @field_validator("quaternion_xyzw")
     @classmethod
@@ -122,35 +135,37 @@ class BoardSection(Section):
     """A chessboard lying on the floor: ``squares`` (per row, per column), square and margin sizes (metres), and
     where it lay in base_link (``x_m``, ``y_m``, ``yaw_deg``)."""
 
-    squares: tuple[Annotated[int, Field(ge=2)], Annotated[int, Field(ge=2)]]
-    square_m: Positive
-    margin_m: NonNegative
-    x_m: float
-    y_m: float
-    yaw_deg: float
+    squares: tuple[ranged(2, 100, " squares", whole=True), ranged(2, 100, " squares", whole=True)]
+    square_m: ranged(0, 1, " m", low_open=True)
+    margin_m: ranged(0, 1, " m")
+    x_m: Place
+    y_m: Place
+    yaw_deg: Angle
 
 
 class FloorImageSection(Section):
     """The floor image: extent (metres, base_link), pixel size, and the route that makes it (``gpo.pipeline``);
     unset keys take the pipeline's defaults."""
 
-    x_range_m: tuple[float, float] | None = None
-    y_range_m: tuple[float, float] | None = None
-    metres_per_pixel: Positive | None = None
+    x_range_m: tuple[Place, Place] | None = None
+    y_range_m: tuple[Place, Place] | None = None
+    metres_per_pixel: ranged(1e-5, 0.1, " m") | None = None
     route: str = "analytic"
     board_image: str | None = None
     board: BoardSection | None = None
 
 
 class KinematicsSection(Section):
-    wheelbase_m: Positive
-    rear_to_reference_m: NonNegative
+    """The paper's bicycle model (``gpo.odometry.kinematics.PaperBicycle``), metres."""
+
+    wheelbase_m: ranged(0, 20, " m", low_open=True)
+    rear_to_reference_m: ranged(0, 20, " m")
 
 
 class OdometrySection(Section):
     method: str | None = None
     vector: str | None = None
-    max_gap_s: Positive | None = None
+    max_gap_s: ranged(0, 60, " s", low_open=True) | None = None
 
 
 class ConfigFile(Section):
@@ -162,7 +177,7 @@ class ConfigFile(Section):
     camchain: str | None = None
     camchain_camera: str | None = None
     mount: MountSection
-    rate_hz: Positive
+    rate_hz: ranged(0, 1000, " Hz", low_open=True)
     frame_id: Name
     topics: TopicsSection
     floor_image: FloorImageSection = FloorImageSection()
@@ -226,21 +241,28 @@ def _expanded_nodes(node: yaml.Node, counted: dict[int, int]) -> int:
 def read_config(path) -> ConfigFile:
     """The checked config file ``path`` (``ConfigFile``); a ValueError lists every problem, each with the key."""
     path = Path(path)
-    document = read_yaml(path)
+    return check_config(read_yaml(path), str(path))
+
+
+def check_config(document, where: str) -> ConfigFile:
+    """The checked config ``document`` (a YAML document: a file's, or one made by changing a file's); a ValueError
+    names ``where`` it came from and lists every problem, each with the key."""
     if not isinstance(document, dict):
-        raise ValueError(
-            f"{path}: a config is a YAML mapping of {', '.join(ConfigFile.model_fields)}; got {type(document).__name__}"
-        )
+        keys = ", ".join(ConfigFile.model_fields)
+        raise ValueError(f"{where}: a config is a YAML mapping of {keys}; got {type(document).__name__}")
     try:
         return ConfigFile.model_validate(document)
     except ValidationError as error:
-        raise ValueError(f"{path}: " + "\n  ".join(_problem(e) for e in error.errors()[:8])) from None
+        raise ValueError(f"{where}: " + "\n  ".join(_problem(e) for e in error.errors()[:8])) from None
 
 
 def _problem(error: dict) -> str:
     """One schema error as people read it: the key's path, what is wrong, what is allowed."""
     location = [part for part in error["loc"] if not isinstance(part, int)]
     where = ".".join(str(part) for part in error["loc"]) or "the file"
+    cause = error.get("ctx", {}).get("error")
+    if isinstance(cause, OutOfRange):  # a key of the file, or the keys of a section that checks its own
+        return "\n  ".join(cause.lines(".".join(str(part) for part in error["loc"])))
     if error["type"] in ("extra_forbidden", "unexpected_keyword_argument"):
         known = _keys(location[:-1])
         close = difflib.get_close_matches(str(location[-1]), known, n=1)
@@ -298,12 +320,14 @@ def load_rig(path) -> Rig:
     return rig_from_config(read_config(path), path)
 
 
-def rig_from_config(config: ConfigFile, path: Path) -> Rig:
-    """The rig of the checked config file ``config``, read from ``path`` (a camchain is relative to it)."""
+def rig_from_config(config: ConfigFile, path: Path, where: str | None = None) -> Rig:
+    """The rig of the checked config file ``config``, read from ``path`` (a camchain is relative to it); errors name
+    ``where`` it came from (default: ``path``)."""
+    where = where or str(path)
     return Rig(
         name=config.name,
-        camera=_camera(config, path),
-        mount=_mount(config.mount, path),
+        camera=_camera(config, path, where),
+        mount=_mount(config.mount, where),
         rate_hz=config.rate_hz,
         image_topic=config.topics.image,
         info_topic=config.topics.camera_info,
@@ -311,21 +335,29 @@ def rig_from_config(config: ConfigFile, path: Path) -> Rig:
     )
 
 
-def _camera(config: ConfigFile, path: Path):
+def _camera(config: ConfigFile, path: Path, where: str):
     if config.camera is not None:
         try:
-            return camera_from_kalibr(config.camera.model_dump(exclude_none=True), f"{path}, camera")
+            return camera_from_kalibr(config.camera.model_dump(exclude_none=True), f"{where}, camera")
         except ValueError as error:
-            if str(path) in str(error):
+            if where in str(error):
                 raise
-            raise ValueError(f"{path}, camera: {error}") from None
+            raise ValueError(f"{where}, camera: {error}") from None
     camchain = path.parent / config.camchain
-    cameras = load_kalibr(camchain) if not camchain.is_dir() else {}
-    if not cameras:
-        raise ValueError(f"{path}: camchain {config.camchain} is a folder; expected a Kalibr camchain YAML file")
+    if camchain.is_dir():
+        raise ValueError(f"{where}: camchain {config.camchain} is a folder; expected a Kalibr camchain YAML file")
+    if not camchain.is_file():
+        raise ValueError(
+            f"{where}: camchain {config.camchain}: no file {camchain} (the key's path is relative to the config's "
+            "folder); expected a Kalibr camchain YAML file: give its path, or the camera inline as camera"
+        )
+    try:
+        cameras = load_kalibr(camchain)
+    except (ValueError, OSError, yaml.YAMLError) as error:
+        raise ValueError(f"{where}: camchain {config.camchain}: {error}") from None
     name = config.camchain_camera or next(iter(cameras))
     if name not in cameras:
-        raise ValueError(f"{path}: camchain_camera {name!r} is not in {config.camchain} ({', '.join(cameras)})")
+        raise ValueError(f"{where}: camchain_camera {name!r} is not in {config.camchain} ({', '.join(cameras)})")
     return cameras[name]
 
 
@@ -338,11 +370,12 @@ def load_mount(path) -> CameraMount:
     try:
         section = MountSection.model_validate(document["mount"])
     except ValidationError as error:
-        raise ValueError(f"{path}: " + "\n  ".join(_problem(e) for e in error.errors()[:8])) from None
+        problems = [_problem({**e, "loc": ("mount", *e["loc"])}) for e in error.errors()[:8]]
+        raise ValueError(f"{path}: " + "\n  ".join(problems)) from None
     return _mount(section, path)
 
 
-def _mount(section: MountSection, path: Path) -> CameraMount:
+def _mount(section: MountSection, where) -> CameraMount:
     """The mount of a config's ``mount`` section: ``position_m`` with ``rpy_deg`` (the body frame) or
     ``quaternion_xyzw`` (the optical frame); with both, they must agree within ``MOUNT_AGREEMENT_DEG``."""
     position = np.array(section.position_m)
@@ -360,7 +393,7 @@ def _mount(section: MountSection, path: Path) -> CameraMount:
                 for mount in (given, written)
             ]
             raise ValueError(
-                f"{path}: mount rpy_deg and quaternion_xyzw disagree by {angle:.3f} degrees: as [roll, pitch, yaw] of "
+                f"{where}: mount rpy_deg and quaternion_xyzw disagree by {angle:.3f} degrees: as [roll, pitch, yaw] of "
                 f"the body frame, rpy_deg is {as_rpy[0]} and quaternion_xyzw is {as_rpy[1]}; give one of them"
             )
     return mounts.get("rpy_deg", mounts.get("quaternion_xyzw"))
