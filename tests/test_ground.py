@@ -398,3 +398,17 @@ def test_floor_points_above_the_horizon_are_invalid():
     points, valid = pixels_to_floor(rig.camera, rig.mount, [[424.0, 5.0], [424.0, 790.0]])
     assert valid.tolist() == [False, True]
     assert np.isnan(points[0]).all()
+
+
+def test_a_widened_floor_image_keeps_its_centre_and_orientation():
+    floor = FloorImage.top_view((0.55, 0.79), (-0.1, 0.1), 0.0008)
+    wide = floor.widened(2.0)
+    centre = [(floor.width - 1) / 2, (floor.height - 1) / 2]
+    np.testing.assert_allclose(wide.pixel_to_base(centre), floor.pixel_to_base(centre), atol=1e-12)
+    assert (wide.width, wide.height) == (floor.width, floor.height)
+    assert wide.metres_per_pixel == pytest.approx(2 * floor.metres_per_pixel, rel=1e-12)
+    x_min, x_max, y_min, y_max = floor.extent
+    np.testing.assert_allclose(wide.extent, [x_min - 0.12, x_max + 0.12, y_min - 0.1, y_max + 0.1], atol=1e-9)
+    np.testing.assert_allclose(wide.affine[:, :2], 2 * floor.affine[:, :2], atol=1e-15)  # same axes
+    with pytest.raises(GroundImageError, match="positive"):
+        floor.widened(0.0)

@@ -37,7 +37,7 @@ import numpy as np
 
 from gpo.motion.layers import slower_count, slower_layer
 from gpo.motion.median import median_of
-from gpo.motion.overview import Overview, disagrees
+from gpo.motion.overview import Overview, OverviewShift, disagrees
 from gpo.motion.ranges import check_rules, in_range
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
@@ -239,8 +239,7 @@ class FloorFlow:
     _detect_mask: np.ndarray | None = field(default=None, init=False, repr=False)
     _valid: np.ndarray | None = field(default=None, init=False, repr=False)
     _size: tuple[int, int] | None = field(default=None, init=False, repr=False)
-    _overview: np.ndarray | None = field(default=None, init=False, repr=False)
-    _correlator: Overview | None = field(default=None, init=False, repr=False)
+    _overview: Overview | None = field(default=None, init=False, repr=False)
 
     def restart(self) -> None:
         """Forget the previous frame: the next ``track`` call starts afresh."""
@@ -266,7 +265,7 @@ class FloorFlow:
             self._check(image.image)  # it may come from another tracker's ``prepare``
         else:
             image = self.prepare(image)
-        overview, previous_overview, self._overview = image.overview, self._overview, image.overview
+        found = self._observe(image.overview)
         image, texture = image.image, image.texture
         previous, points, previous_texture = self._image, self._points, self._texture
         elapsed = 1.0 if time_s is None or previous is None else time_s - self._time_s
@@ -282,8 +281,8 @@ class FloorFlow:
             points = self._detect(previous)
         prediction = (self._velocity * elapsed).astype(np.float32)
         measurement, surviving = self._measure(previous, image, points, prediction)
-        if overview is not None and previous_overview is not None:
-            measurement = self._checked(measurement, previous_overview, overview)
+        if found is not None:
+            measurement = self._checked(measurement, found)
         self._points = surviving
         self._predicted = measurement.quality.ok
         if measurement.quality.ok:
@@ -330,13 +329,18 @@ class FloorFlow:
         measurement = FlowMeasurement(start, end, median, vectors.mean(axis=0), inlier, quality)
         return measurement, end
 
-    def _checked(self, measurement: FlowMeasurement, previous: np.ndarray, current: np.ndarray) -> FlowMeasurement:
+    def _observe(self, view: np.ndarray | None) -> OverviewShift | None:
+        """The whole-view check's shift into this frame's wider ``view`` (``gpo.motion.overview``), or None."""
+        if view is None:
+            return None
+        if self._overview is None:
+            self._overview = Overview(self.parameters.overview_scale, view.shape[::-1])
+        return self._overview.observe(view)
+
+    def _checked(self, measurement: FlowMeasurement, found: OverviewShift) -> FlowMeasurement:
         """``measurement``, or the whole-view check's translation where it disagrees (``gpo.motion.overview``): the
         overview's shift measured at the floor image's middle, a ``OVERVIEW_GRID`` square grid of points."""
         p = self.parameters
-        if self._correlator is None:
-            self._correlator = Overview(p.overview_scale, current.shape[::-1])
-        found = self._correlator.shift(previous, current)
         if not disagrees(measurement.median, measurement.flag, found, p.overview_tolerance_px, p.overview_min_peak):
             return measurement
         width, height = self._size
