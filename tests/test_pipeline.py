@@ -277,3 +277,8 @@ def test_a_runs_cautions_name_each_cause_behind_a_tenth_of_its_steps():
     assert found[2].startswith("the filter refused 10 increments in 100 steps")
     result = OdometryResult(records(0, 10, 90), 1.0, load_config(), "a", "/c")
     assert result.summary()["cautions"] == result.cautions and not result.flagged  # a caution is not a flag
+    overview = records(0, 0, 100)
+    overview[1:11] = [dataclasses.replace(r, overview=True) for r in overview[1:11]]
+    result = OdometryResult(overview, 1.0, load_config(), "a", "/c")
+    assert result.cautions == ["10 of 100 steps measured on the whole view, the tracks disagreeing with it (a glossy "
+                               "floor's reflections?)"] and result.summary()["frames_overview"] == 10

@@ -167,6 +167,7 @@ def execute(run_: Run, config: OdometryConfig, key: str) -> Outcome:
         "frames_skipped": summary["frames_skipped"],
         "flags": json.dumps(summary["flags"], sort_keys=True),
         "frames_slower_layer": summary.get("frames_slower_layer", 0),
+        "frames_overview": summary.get("frames_overview", 0),
         "frames_per_second": result.frames_per_second,
         "seconds": result.seconds,
         "run_seconds": time.perf_counter() - started,

@@ -436,11 +436,11 @@ class FeatureMatches:
     seconds: dict
 
     @property
-    def counts(self) -> tuple[int, int, int, float, int]:
-        """(matches, kept, kept, NaN, 0): a frame's record's counts (tracked, kept, inliers, spread in pixels, slower
-        vectors), as for a KLT flow (``gpo.motion.klt.FlowMeasurement.counts``)."""
+    def counts(self) -> tuple[int, int, int, float, int, bool]:
+        """(matches, kept, kept, NaN, 0, False): a frame's record's counts (tracked, kept, inliers, spread in pixels,
+        slower vectors, whole-view check), as for a KLT flow (``gpo.motion.klt.FlowMeasurement.counts``)."""
         kept = int(self.kept.sum())
-        return len(self.pairs), kept, kept, math.nan, 0
+        return len(self.pairs), kept, kept, math.nan, 0, False
 
     @property
     def histogram_kept(self) -> np.ndarray:

@@ -201,10 +201,11 @@ class FlowMeasurement:
         return self.quality.flag
 
     @property
-    def counts(self) -> tuple[int, int, int, float, int]:
-        """(tracked, kept, inliers, spread in pixels, vectors in a slower layer), as a frame's record holds them."""
-        quality = self.quality
-        return quality.tracked, quality.kept, quality.inliers, quality.spread_px, quality.slower
+    def counts(self) -> tuple[int, int, int, float, int, bool]:
+        """(tracked, kept, inliers, spread in pixels, vectors in a slower layer, measured by the whole-view check),
+        as a frame's record holds them."""
+        q = self.quality
+        return q.tracked, q.kept, q.inliers, q.spread_px, q.slower, q.overview
 
 
 @dataclass(frozen=True, eq=False)
@@ -347,7 +348,7 @@ class FloorFlow:
         u, v = np.meshgrid(*(np.linspace(0.25, 0.75, OVERVIEW_GRID) * (side - 1) for side in (width, height)))
         start = np.column_stack([u.ravel(), v.ravel()]).astype(np.float32)
         shift, count = found.shift_px, len(start)
-        quality = FlowQuality(count, count, count, 0.0, overview=True)
+        quality = FlowQuality(count, count, count, float("nan"), overview=True)  # NaN: the fusion's reference spread
         return FlowMeasurement(start, start + shift.astype(np.float32), shift, shift, np.ones(count, bool), quality)
 
     def _check(self, image: np.ndarray) -> None:

@@ -68,7 +68,8 @@ class OtherSize(Unreadable):
 class FrameRecord:
     """One frame: header stamp (ns), base_link's ``pose`` (x, y, theta) in odom after it, the flow's counts
     (tracked, kept, inliers, spread in pixels), ``status`` (measured, coasted, held, skipped, first), the
-    ``flag`` saying why when not measured, and ``slower``: the kept vectors in a slower layer (``gpo.motion.klt``)."""
+    ``flag`` saying why when not measured, ``slower``: the kept vectors in a slower layer (``gpo.motion.klt``), and
+    ``overview``: whether the whole-view check measured the frame (``gpo.motion.overview``)."""
 
     stamp_ns: int
     pose: tuple[float, float, float]
@@ -79,6 +80,7 @@ class FrameRecord:
     status: Status
     flag: str | None = None
     slower: int = 0
+    overview: bool = False
 
     def __post_init__(self):
         object.__setattr__(self, "status", Status(self.status))  # a status given by its name, as a member
@@ -213,5 +215,6 @@ class FloorOdometer:
         return self._record(stamp_ns, measurement, Status.HELD, why)
 
     def _record(self, stamp_ns, measurement, status, flag=None) -> FrameRecord:
-        counts = (0, 0, 0, math.nan, 0) if measurement is None else measurement.counts
-        return FrameRecord(int(stamp_ns), tuple(float(v) for v in self.pose), *counts[:4], status, flag, counts[4])
+        counts = (0, 0, 0, math.nan, 0, False) if measurement is None else measurement.counts
+        pose = tuple(float(v) for v in self.pose)
+        return FrameRecord(int(stamp_ns), pose, *counts[:4], status, flag, counts[4], counts[5])

@@ -94,7 +94,8 @@ class OdometryResult:
         steps not measured (coasted, held or skipped; by their most common reason), measured steps whose flow held a
         second, slower layer of motion (``gpo.motion.layers``: a glossy floor's reflections, which pull the floor's
         motion short), and for ``fused`` the increments the filter's NIS gate refused (the floor and the tracking
-        camera disagreeing beyond their noise). Empty when nothing reaches it."""
+        camera disagreeing beyond their noise), and measured steps the whole-view check took over
+        (``gpo.motion.overview``). Empty when nothing reaches it."""
         steps = len(self.records) - 1
         if steps <= 0:
             return []
@@ -105,6 +106,10 @@ class OdometryResult:
             reasons = Counter(_reason(r.flag) for r in self.records if r.flag)
             why = f": mostly {reasons.most_common(1)[0][0]}" if reasons else ""
             found.append(f"{missed} of {steps} steps not measured{why}")
+        overview = sum(r.overview for r in measured)
+        if overview >= CAUTION_SHARE * steps:
+            found.append(f"{overview} of {steps} steps measured on the whole view, the tracks disagreeing with it "
+                         "(a glossy floor's reflections?)")
         slower = sum(slower_layer(r.slower, r.kept) for r in measured)
         if slower >= CAUTION_SHARE * steps:
             layer = "a second, slower layer of motion (a glossy floor's reflections)"
@@ -142,10 +147,11 @@ class OdometryResult:
 
     def summary(self) -> dict:
         """Plain numbers for people and files: distance, frames by status, flags by reason, speed, and (when any)
-        the frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor) and the run's
-        ``cautions``."""
+        the frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor), those the
+        whole-view check measured (``gpo.motion.overview``) and the run's ``cautions``."""
         statuses = Counter(r.status for r in self.records)
         slower = sum(slower_layer(r.slower, r.kept) for r in self.records)
+        overview = sum(r.overview for r in self.records)
         reasons = Counter(_reason(r.flag) for r in self.records if r.flag)
         unreadable = [f"{r.stamp_ns}: {r.flag}" for r in self.records if r.flag and r.flag.startswith("unreadable")]
         trajectory = self.trajectory
@@ -158,6 +164,7 @@ class OdometryResult:
             **{f"frames_{status}": statuses.get(status, 0) for status in Status if status is not Status.FIRST},
             "flags": dict(reasons.most_common()),
             **({"frames_slower_layer": slower} if slower else {}),
+            **({"frames_overview": overview} if overview else {}),
             "distance_m": round(trajectory.path_length, 4),
             "duration_s": round(float(np.ptp(trajectory.times)), 3) if len(trajectory) else 0.0,
             "frames_per_second": round(self.frames_per_second, 1),
