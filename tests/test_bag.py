@@ -155,7 +155,8 @@ def test_gray_frames_weigh_the_channels_as_luma(tmp_path, encoding):
         (frame,) = recording.frames(gray=True, progress=False)
     assert frame.encoding == "mono8"
     assert frame.image.dtype == np.uint8
-    np.testing.assert_allclose(frame.image, luma, atol=1.0)
+    # rounded to whole grey levels (0.5), OpenCV's weights in fixed point (measured 0.503 at most)
+    np.testing.assert_allclose(frame.image, luma, atol=0.51)
 
 
 def test_gray_keeps_mono16(tmp_path):
