@@ -34,6 +34,7 @@ from gpo.io.bag import Recording
 from gpo.io.bag_writer import BagWriter
 from gpo.io.ros_messages import COMPRESSED_IMAGE, IMAGE
 from gpo.io.trajectory import Trajectory
+from gpo.pipeline.config import load_config
 
 IMAGE_TOPIC = "/camera/fisheye1/image_raw"
 ODOMETRY_TOPIC = "/camera/odom/sample"
@@ -157,7 +158,7 @@ BAGS = {
     "no_odometry": {"odometry": False},
     "no_tf_static": {"static_tf": False},
     "nan_odometry": {"poses": lambda i: [np.nan if i == 3 else 0.01 * i, 0.0, 0.0]},
-    "jumping_odometry": {"poses": lambda i: [0.01 * i + (5.0 if i == 6 else 0.0), 0.0, 0.0]},
+    "jumping_odometry": {"poses": lambda i: [5.0 if i == 6 else 0.0, 0.0, 0.0]},  # standing, but for frame 6
 }
 
 
@@ -374,7 +375,10 @@ def test_write_bag_copies_the_bag_with_the_estimate(world, tmp_path, capsys, fmt
     check(capsys, [world.root, tmp_path], ["run", bag, "--config", world.config, "--out", tmp_path / "t.tum",
                                            "--write-bag", copy], 0, "/gpo/odom")
     with Recording(copy) as recorded:
-        assert len(recorded.trajectory("/gpo/odom")) == 12
+        carried, written = recorded.trajectory("/gpo/odom"), Trajectory.read_tum(tmp_path / "t.tum")
+    np.testing.assert_array_equal(carried.stamps_ns, written.stamps_ns)  # the estimate, pose for pose
+    np.testing.assert_array_equal(carried.positions, written.positions)
+    assert len(carried) == 12
 
 
 @pytest.mark.parametrize(
@@ -427,7 +431,11 @@ def test_an_unreadable_frame_is_skipped_and_flagged_and_the_run_goes_on(world, t
     check(capsys, [world.root, tmp_path], ["run", world.bag(name), "--config", world.config, "--out", out], 0,
           "flagged 1: unreadable frame")
     assert summary(out)["frames_skipped"] == skipped and flag in summary(out)["unreadable"][0]
-    assert len(Trajectory.read_tum(out)) == 11  # every readable frame, the ones after it too
+    path = Trajectory.read_tum(out)
+    assert len(path) == 11  # every readable frame, the ones after it too
+    # and the step over the skipped frame is measured whole: the path turns as the good bag's does (measured within
+    # 0.4 %; a step lost would leave it 9 % short)
+    assert abs(path.yaw[-1] / _path(world).yaw[-1] - 1) < 0.01
 
 
 @pytest.mark.parametrize(
@@ -476,22 +484,39 @@ def test_fused_checks_its_second_source_before_the_first_frame(world, tmp_path, 
 
 
 def test_fused_with_jumping_poses_still_gives_a_path(world, tmp_path, capsys):
+    """The tracking camera stands still but for a 5 m jump at frame 6: the filter refuses the steps into and out of
+    the jump, and the path is the one the camera standing still throughout gives (within 0.1 micrometre and 0.4
+    millidegrees measured: the still camera's two steps there are fused)."""
+    still = write_bag(tmp_path / "still.bag", poses=lambda i: [0.0, 0.0, 0.0])
+    expected = gpo.pipeline.run.run(still, load_config(world.config).replace(method="fused"), progress=False)
     out = tmp_path / "t.tum"
     check(capsys, [world.root, tmp_path], ["run", world.bag("jumping_odometry"), "--config", world.config, "--method",
                                            "fused", "--out", out], 0, f"wrote {out}")
-    assert np.all(np.isfinite(Trajectory.read_tum(out).positions))
+    refused = summary(out)["fusion"]["refused_by_nis_gate"]
+    assert refused == expected.summary()["fusion"]["refused_by_nis_gate"] + 2
+    path = Trajectory.read_tum(out)
+    np.testing.assert_allclose(path.positions, expected.trajectory.positions, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(np.degrees(path.yaw), np.degrees(expected.trajectory.yaw), rtol=0, atol=1e-3)
 
 
 def test_a_fusion_that_fails_late_still_writes_the_floor_odometry(world, tmp_path, capsys, monkeypatch):
     def failing(*args, **kwargs):
         raise ValueError("the filter diverged")
 
+    floor = _path(world)  # the config's fusion.floor_method, gpo-exact
     monkeypatch.setattr(gpo.pipeline.run, "fuse", failing)
     out = tmp_path / "t.tum"
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--method", "fused", "--out",
                                            out], 1, "the floor odometry is the result: the filter diverged")
     kept = "fusion failed, the floor odometry is the result"
-    assert len(Trajectory.read_tum(out)) == 12 and kept in summary(out)["stopped_early"]
+    assert kept in summary(out)["stopped_early"]
+    np.testing.assert_array_equal(Trajectory.read_tum(out).positions, floor.positions)  # every one of its 12 poses
+
+
+def _path(world: World, name: str = "good", method: str = "gpo-exact") -> Trajectory:
+    """The path of a run of bag ``name`` by ``method``, through the library: what a whole run writes."""
+    config = load_config(world.config).replace(method=method)
+    return gpo.pipeline.run.run(world.bag(name), config, progress=False).trajectory
 
 
 def _stop_after(count: int, exception: BaseException):
@@ -507,31 +532,35 @@ def _stop_after(count: int, exception: BaseException):
 
 
 def test_a_flagged_run_never_replaces_a_good_trajectory(world, tmp_path, capsys, monkeypatch):
+    whole = _path(world)
     out = tmp_path / "t.tum"
     out.write_text("# a good trajectory\n")
     monkeypatch.setattr(Recording, "frames", _stop_after(6, ValueError("message 6 is damaged")))
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 1,
           "stopped early after 6 frames: message 6 is damaged", "is kept", "--force")
     assert out.read_text() == "# a good trajectory\n"
-    assert len(Trajectory.read_tum(tmp_path / "t.flagged.tum")) == 6
+    np.testing.assert_array_equal(Trajectory.read_tum(tmp_path / "t.flagged.tum").positions, whole.positions[:6])
 
 
 def test_force_lets_a_flagged_run_replace_the_file(world, tmp_path, capsys, monkeypatch):
     out = tmp_path / "t.tum"
     out.write_text("# a good trajectory\n")
+    whole = _path(world)
     monkeypatch.setattr(Recording, "frames", _stop_after(6, ValueError("message 6 is damaged")))
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out, "--force"], 1,
           f"wrote {out}", changed=[out])
-    assert len(Trajectory.read_tum(out)) == 6
+    np.testing.assert_array_equal(Trajectory.read_tum(out).positions, whole.positions[:6])
 
 
 @pytest.mark.parametrize("done", [0, 5])
 def test_ctrl_c_keeps_the_frames_done(world, tmp_path, capsys, monkeypatch, done):
+    whole = _path(world)
     out = tmp_path / "t.tum"
     monkeypatch.setattr(Recording, "frames", _stop_after(done, KeyboardInterrupt()))
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 130,
           f"interrupted after {done} frames")
-    assert len(Trajectory.read_tum(out)) == done and summary(out)["interrupted"] is True
+    assert summary(out)["interrupted"] is True
+    np.testing.assert_array_equal(Trajectory.read_tum(out).positions.reshape(-1, 3), whole.positions[:done])
 
 
 SLOW_MAIN = """

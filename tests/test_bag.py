@@ -155,7 +155,8 @@ def test_gray_frames_weigh_the_channels_as_luma(tmp_path, encoding):
         (frame,) = recording.frames(gray=True, progress=False)
     assert frame.encoding == "mono8"
     assert frame.image.dtype == np.uint8
-    np.testing.assert_allclose(frame.image, luma, atol=1.0)
+    # rounded to whole grey levels (0.5), OpenCV's weights in fixed point (measured 0.503 at most)
+    np.testing.assert_allclose(frame.image, luma, atol=0.51)
 
 
 def test_gray_keeps_mono16(tmp_path):
@@ -195,9 +196,13 @@ def test_jpeg_round_trip_is_close_and_keeps_the_channel_order(tmp_path, bag_form
         (mono,) = recording.frames("/mono", progress=False)
     assert (colour.encoding, mono.encoding) == ("rgb8", "mono8")
     for frame, original in ((colour, image), (mono, image[..., 1])):
+        # what OpenCV's own codec gives at quality 95, pixel for pixel (its colour images are blue-green-red)
+        coded = cv2.imencode(".jpg", original[..., ::-1] if original.ndim == 3 else original,
+                             [cv2.IMWRITE_JPEG_QUALITY, 95])[1]
+        decoded = cv2.imdecode(coded, cv2.IMREAD_UNCHANGED)
+        np.testing.assert_array_equal(frame.image, decoded[..., ::-1] if decoded.ndim == 3 else decoded)
         error = np.abs(frame.image.astype(int) - original)
-        assert error.mean() < 1.5
-        assert error.max() <= 16
+        assert error.mean() < 1.5 and error.max() <= 10  # measured 0.71 and 5 (colour), 0.04 and 1 (mono)
 
 
 def test_compressed_image_of_an_older_driver_comes_back_as_bgr(tmp_path):
@@ -213,7 +218,8 @@ def test_compressed_image_of_an_older_driver_comes_back_as_bgr(tmp_path):
     with Recording(path) as recording:
         (frame,) = recording.frames(progress=False)
     assert frame.encoding == "bgr8"
-    assert np.abs(frame.image.astype(int) - bgr).mean() < 1.5
+    np.testing.assert_array_equal(frame.image, cv2.imdecode(data, cv2.IMREAD_COLOR))  # as written, channel for channel
+    assert np.abs(frame.image.astype(int) - bgr).mean() < 1.5  # measured 0.71
 
 
 def test_padded_rows_are_read_by_their_step(tmp_path):

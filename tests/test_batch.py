@@ -9,7 +9,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import pytest
 import yaml
@@ -227,7 +226,8 @@ def test_sweep_on_a_local_cluster_keeps_failures_and_resumes(bags, tmp_path):
     assert "garbage.bag" in errors["garbage:failed"]
     assert "missing.bag: no such recording" in errors["missing:failed"]
     ok = table[table["status"] == "ok"].set_index("key")
-    assert len(ok) == 4 and (ok["final_error_percent"] < 1.0).all() and (ok["frames"] > 25).all()
+    # measured 0.004 to 0.21 % (late, gpo-rigid); each of the short pieces has 30 frames, the test preset 97
+    assert len(ok) == 4 and (ok["final_error_percent"] < 0.5).all() and (ok["frames"] >= 30).all()
     assert (ok["recording_sha256"].str.len() == 64).all() and ok["code_version"].nunique() == 1
     row = table[(table["recording"] == "early") & (table["param.klt.window_px"] == 15)].iloc[0]
     assert row["final_error_m"] == pytest.approx(direct_final_error_m(bags["early"], {"klt.window_px": 15}), abs=1e-12)
@@ -351,4 +351,6 @@ def test_a_worker_killed_mid_sweep(bags, process_cluster, tmp_path):
     assert sorted(result.executed) == sorted(set(result.executed)) and len(result.executed) == 4
     assert result.table["status"].tolist() == ["ok"] * 4  # the run lost with its worker was run again elsewhere
     assert again.executed == [] and sorted(again.reused) == sorted(result.executed)
-    assert np.isfinite(result.table["final_error_m"]).all()
+    for _, row in result.table.iterrows():  # each run's number, the lost one's too, as the run made directly gives it
+        expected = direct_final_error_m(bags[row["recording"]], {"klt.window_px": int(row["param.klt.window_px"])})
+        assert row["final_error_m"] == pytest.approx(expected, abs=1e-12), row["key"]

@@ -88,10 +88,10 @@ def test_every_fisheye_model_calibrates_the_real_views(real_fits):
     for model in ("eucm", "ds", "kb4", "omni", "omni as BoofCV"):
         result = real_fits[model]
         assert result.ok, result.summary()
-        assert len(result.used) >= 25 and result.rms_px < 0.21
+        assert len(result.used) >= 25 and result.rms_px < 0.21  # measured 0.146 (kb4) to 0.201 px (eucm)
     assert real_fits["kb4"].rms_px < real_fits["eucm"].rms_px  # four coefficients follow this lens best
     # a pinhole cannot hold a lens seeing beyond 180 degrees: most views lie outside its valid region
-    assert not real_fits["pinhole"].ok and len(real_fits["pinhole"].used) < 13
+    assert not real_fits["pinhole"].ok and len(real_fits["pinhole"].used) < 13  # measured: 4 of the 26 views
 
 
 def test_omni_agrees_with_boofcvs_published_calibration(real_fits, boofcv):

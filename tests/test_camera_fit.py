@@ -38,10 +38,13 @@ def test_the_real_t265_kb4_as_eucm_double_sphere_and_omni(fetch_or_skip):
     fits = {model: fit_model(kb4, model, max_angle_deg=80.0) for model in ("eucm", "ds", "omni")}
     for fit in fits.values():
         assert fit.samples == 1803 and fit.uncovered == 0
-        assert abs(fit.camera.cx - kb4.cx) < 0.05 and abs(fit.camera.cy - kb4.cy) < 0.05
+        # the principal point stays the KB4's: measured 0.003 px off at most (the double sphere's)
+        assert abs(fit.camera.cx - kb4.cx) < 0.006 and abs(fit.camera.cy - kb4.cy) < 0.006
+    # measured (the same on the avx2 and sse4 paths, .ci/fp-path): RMS and worst 0.148 and 0.488 px (eucm), 0.094 and
+    # 0.376 px (omni), 1.012 and 4.09 px (ds: the double sphere holds this lens least well)
     assert fits["eucm"].rms_px < 0.2 and fits["eucm"].worst_px < 0.6
     assert fits["omni"].rms_px < 0.15 and fits["omni"].worst_px < 0.5
-    assert fits["ds"].rms_px < 1.1 and fits["ds"].worst_px < 4.5  # the double sphere holds this lens least well
+    assert fits["ds"].rms_px < 1.1 and fits["ds"].worst_px < 4.5
     # and each fit's own round trip holds over every pixel it has a ray for
     for fit in fits.values():
         pixels = fit.camera.pixel_grid()[::3, ::3]

@@ -81,7 +81,7 @@ def test_sift_matches_give_the_known_turn_and_shift(angle_deg, shift):
     matches = _tracked(image, moved, detector="sift")
     assert matches.flag is None and matches.kept.sum() >= 30
     angle_error, shift_error = _errors(*rigid_fit(matches.start, matches.end), matrix)
-    assert abs(angle_error) < 0.1 and shift_error < 0.3
+    assert abs(angle_error) < 0.015 and shift_error < 0.07  # measured 0.0061 deg and 0.033 px at most
 
 
 def test_orb_matches_give_a_known_shift():
@@ -90,7 +90,7 @@ def test_orb_matches_give_a_known_shift():
     matches = _tracked(image, moved, detector="orb")
     assert matches.flag is None and matches.kept.sum() >= 30
     angle_error, shift_error = _errors(*rigid_fit(matches.start, matches.end), matrix)
-    assert abs(angle_error) < 0.1 and shift_error < 0.3
+    assert abs(angle_error) < 0.006 and shift_error < 0.3  # measured 0.0027 deg and 0.17 px (ORB's pyramid grid)
 
 
 @pytest.mark.parametrize(("angle_deg", "shift"), MOTIONS)
@@ -106,8 +106,8 @@ def test_orb_in_a_turn_needs_the_refit(angle_deg, shift):
     increment = refit(*matches.matched, paper, 1.5, 6)
     # end = R(angle) start + t, with angle = -dtheta and t where the origin is seen after the increment
     angle_error, shift_error = _errors(-increment[2], seen_after(np.zeros((1, 2)), increment)[0], matrix)
-    assert abs(angle_error) < 0.1 and shift_error < 0.3
-    if angle_deg == 3.0:  # this frame's paper fit is well off
+    assert abs(angle_error) < 0.08 and shift_error < 0.2  # measured 0.041 deg and 0.10 px at most
+    if angle_deg == 3.0:  # this frame's paper fit is well off: measured 0.50 deg
         assert abs(_errors(*rigid_fit(matches.start, matches.end), matrix)[0]) > 0.2
 
 
@@ -142,7 +142,7 @@ def test_both_filters_remove_wrong_matches_better_than_either_alone():
     def precision(kept):
         return right[kept].mean()
 
-    assert precision(both) > 0.95 and both.sum() >= 50
+    assert precision(both) > 0.95 and both.sum() >= 50  # measured 0.992 of 264 kept, from 0.75 of all
     assert precision(histogram) <= precision(both) and precision(loops) <= precision(both)
 
 

@@ -36,6 +36,7 @@ def test_median_vector_equals_a_known_shift(du, dv):
     image = _texture()
     measurement = _track(image, _moved(image, du, dv))
     assert measurement.quality.ok
+    # measured 0.036-0.045 px off: the shifted image's cubic interpolation (a whole-pixel shift is read to 0.001 px)
     np.testing.assert_allclose(measurement.median, [du, dv], atol=0.05)
     assert measurement.quality.kept > 50
 
@@ -45,7 +46,7 @@ def test_rigid_fit_of_tracks_recovers_a_rotation():
     angle = np.radians(1.5)
     measurement = _track(image, _moved(image, 3.0, -2.0, angle))
     increment = increment_from_point_pairs(measurement.start, measurement.end)
-    assert -increment[2] == pytest.approx(angle, abs=2e-4)
+    assert -increment[2] == pytest.approx(angle, abs=1e-4)  # measured 4.0e-5 rad off
 
 
 def test_median_resists_outliers_that_pull_the_mean():
@@ -58,8 +59,8 @@ def test_median_resists_outliers_that_pull_the_mean():
     second[90:150, 20:80] = glint
     measurement = _track(first, second, max_corners=300, min_distance_px=5)
     assert measurement.quality.ok
-    assert measurement.median[1] == pytest.approx(8.0, abs=0.1)
-    assert measurement.mean[1] < 7.5  # pulled towards the glint's zero motion
+    assert measurement.median[1] == pytest.approx(8.0, abs=0.005)  # measured 0.0005 px off
+    assert measurement.mean[1] < 7.5  # pulled towards the glint's zero motion: measured 7.0
     assert measurement.quality.inliers < measurement.quality.kept
 
 
@@ -87,7 +88,7 @@ def test_exposure_flicker_does_not_break_tracking():
     image = _texture()
     brighter = cv2.convertScaleAbs(_moved(image, 2.0, 6.0), alpha=1.12, beta=5)
     measurement = _track(image, brighter)
-    np.testing.assert_allclose(measurement.median, [2.0, 6.0], atol=0.05)
+    np.testing.assert_allclose(measurement.median, [2.0, 6.0], atol=0.005)  # measured 0.0006 px off
 
 
 def test_textureless_floor_is_flagged_not_measured():
@@ -105,7 +106,7 @@ def test_tracks_carry_over_with_the_predicted_motion():
     flow.track(_moved(image, 0.0, 0.0, centre=(200.0, 200.0)))
     measurements = [flow.track(_moved(image, 0.5 * k, 20.0 * k, centre=(200.0, 200.0))) for k in range(1, 9)]
     assert all(m.quality.ok for m in measurements[1:])
-    np.testing.assert_allclose([m.median for m in measurements[1:]], [[0.5, 20.0]] * 7, atol=0.05)
+    np.testing.assert_allclose([m.median for m in measurements[1:]], [[0.5, 20.0]] * 7, atol=0.005)  # measured 0.0009
     tracked = [m.quality.tracked for m in measurements]
     assert min(tracked) < max(tracked)  # reused tracks thin out, then corners are detected afresh
 

@@ -51,8 +51,8 @@ def _drive(seconds=6.0, rate_hz=30.0, v=0.4, omega=0.3, sigma=(0.02, 0.02), seed
 
 def test_a_constant_arc_is_followed():
     fusion, truth = _drive()
-    assert np.hypot(*(fusion.state[:2] - truth[:2])) < 0.02
-    assert abs(fusion.state[2] - truth[2]) < 0.02
+    assert np.hypot(*(fusion.state[:2] - truth[:2])) < 0.02  # measured 17.8 mm: 1.2 of the filter's own sigmas
+    assert abs(fusion.state[2] - truth[2]) < 0.01  # measured 0.0037 rad; the filter's own sigma is 0.0089 rad
     velocity_error = fusion.state[3:5] - [0.4, 0.3]
     assert (np.abs(velocity_error) < 3 * np.sqrt(np.diag(fusion.covariance[3:5, 3:5]))).all()
 
@@ -79,8 +79,8 @@ def test_an_accelerating_robot_is_not_followed_late():
         fusion.add(
             "floor", times[k], between(truth[k - 1], truth[k]), 1 / rate, increment_covariance(0.002, 0.03, 1 / rate)
         )
-        assert np.hypot(*(fusion.state[:2] - truth[k, :2])) < 1e-4
-    assert abs(fusion.state[3] - acceleration * seconds) < 0.05
+        assert np.hypot(*(fusion.state[:2] - truth[k, :2])) < 1e-8  # measured 1.1e-9 m at most: exact but rounding
+    assert abs(fusion.state[3] - acceleration * seconds) < 0.005  # measured 1.8 mm/s: the velocity lags a little
 
 
 def test_sideways_steps_are_not_fused():
@@ -98,26 +98,41 @@ def test_sideways_steps_are_not_fused():
     np.testing.assert_allclose(paths[1], paths[0], rtol=0, atol=1e-12)
 
 
-def test_two_sources_at_different_rates_beat_either():
-    rng = np.random.default_rng(1)
-    v, omega, seconds = 0.3, -0.2, 5.0
-    sources = {"floor": (30.0, 0.03), "camera": (200.0, 0.08)}
-    errors = {}
+TWO_SOURCES = {"floor": (30.0, 0.03), "camera": (200.0, 0.08)}  # rate (Hz), speed and turn sigma of each source
+
+
+def _two_sources(seed, v=0.3, omega=-0.2, seconds=5.0):
+    """Final position error (m) and variance (m^2, the covariance's trace) of the filter fed the floor alone, the
+    camera alone and both along a constant arc; each source's noisy increments are drawn once, so that the three
+    filters read the same measurements."""
+    measured = []
+    for index, (name, (rate, sigma)) in enumerate(TWO_SOURCES.items()):
+        rng = np.random.default_rng([seed, index])
+        covariance = increment_covariance(sigma, sigma, 1 / rate)
+        for k in range(1, round(seconds * rate) + 1):
+            noisy = _noisy(arc_increment(v, omega, 1 / rate), covariance, rng)
+            measured.append((k / rate, name, noisy, 1 / rate, covariance))
+    measured.sort(key=lambda measurement: measurement[0])  # in time, as they arrive
+    errors, variances = [], []
     for used in (("floor",), ("camera",), ("floor", "camera")):
-        events = sorted(
-            (k / rate, name)
-            for name in used
-            for k in range(1, round(seconds * sources[name][0]) + 1)
-            for rate in [sources[name][0]]
-        )
         fusion = OdometryFusion(0.0, sources=used)
-        for time_s, name in events:
-            rate, sigma = sources[name]
-            covariance = increment_covariance(sigma, sigma, 1 / rate)
-            fusion.add(name, time_s, _noisy(arc_increment(v, omega, 1 / rate), covariance, rng), 1 / rate, covariance)
+        for time_s, name, increment, dt, covariance in measured:
+            if name in used:
+                fusion.add(name, time_s, increment, dt, covariance)
         fusion.predict(seconds)
-        errors[used] = np.hypot(*(fusion.state[:2] - arc_increment(v, omega, seconds)[:2]))
-    assert errors["floor", "camera"] < min(errors["floor",], errors["camera",]) * 1.2
+        errors.append(np.hypot(*(fusion.state[:2] - arc_increment(v, omega, seconds)[:2])))
+        variances.append(np.trace(fusion.covariance[:2, :2]))
+    return errors, variances
+
+
+def test_two_sources_at_different_rates_beat_either():
+    """Over 20 seeded drives the fused final position's RMS error lies below either source's alone, and the filter's
+    own position variance is about halved (the two sources weigh about the same over the drive). One drive alone
+    proves nothing: its fused end lies nearer the truth than both sources' ends in 9 of these 20 drives."""
+    errors, variances = np.array([_two_sources(seed) for seed in range(20)]).transpose(1, 0, 2)
+    rms = np.sqrt(np.mean(errors**2, axis=0))  # floor, camera, both
+    assert rms[2] < 0.85 * rms[:2].min(), rms  # measured 0.73; the filter's variances predict sqrt(0.52) = 0.72
+    assert (variances[:, 2] < 0.55 * variances[:, :2].min(axis=1)).all()  # measured 0.52 at most; equal sources: 0.5
 
 
 def test_bad_measurements_are_refused():
@@ -189,7 +204,8 @@ def test_fused_path_beats_a_tracker_with_a_scale_error_and_its_covariance_grows(
     assert fused.trajectory.stamps_ns.tolist() == floor.stamps_ns.tolist()
     assert fused.refused == 0
     assert _final_position_error(tracker) > 0.05
-    assert _final_position_error(fused.trajectory) < 0.3 * _final_position_error(tracker)
+    # measured 5.1 mm against the tracker's 58.7 mm: the floor's own 5.1 mm, the tracker's scale error estimated away
+    assert _final_position_error(fused.trajectory) < 0.1 * _final_position_error(tracker)
     pose = fused.covariances[:, :3, :3]
     assert fused.covariances.shape == (len(floor), 7, 7) and fused.biases.shape == (len(floor), 2)
     np.testing.assert_allclose(pose, np.transpose(pose, (0, 2, 1)), rtol=0, atol=1e-15)
@@ -208,7 +224,7 @@ def test_floor_steps_without_inliers_are_not_fused():
     np.testing.assert_allclose(flagged.trajectory.positions, left_out.trajectory.positions, rtol=0, atol=1e-12)
     np.testing.assert_allclose(flagged.covariances, left_out.covariances, rtol=0, atol=1e-15)
     assert flagged.refused == 0  # not offered to the filter at all, so not refused by its gate either
-    assert _final_position_error(flagged.trajectory) < 0.01
+    assert _final_position_error(flagged.trajectory) < 1e-3  # measured 0.38 mm
     offered = fuse(wrong, _measured(wrong), tracker, FusionSettings())  # the same step fused: refused as an outlier
     assert offered.refused == 1
 
@@ -289,7 +305,7 @@ def test_the_camera_biases_are_estimated_as_the_simulator_drifts():
         estimate, sigma = fused.biases[-1], np.sqrt(np.diagonal(fused.covariances[-1])[5:7])
         truth = np.array([drift.scale_error, drift.yaw_bias_radps])
         assert (np.abs(estimate - truth) < 3 * sigma).all(), (estimate, truth, sigma)
-        assert sigma[0] < 0.005 and sigma[1] < 1e-3
+        assert (3 * sigma < np.abs(truth)).all(), sigma  # tight enough to tell: sigmas measured 0.0021 and 1.6e-4
         assert fused.refused == 0 and fused.dropped == {}
 
 
@@ -309,8 +325,8 @@ def test_an_outage_is_bridged_by_the_calibrated_camera():
             poses = np.column_stack([fused.trajectory.positions[:, :2], fused.trajectory.yaw])
             error = between(poses[start], poses[end]) - between(truth[start], truth[end])
             errors[name] = np.hypot(*error[:2])
-        assert errors["biases"] < 0.006 * distance, (seed, errors)
-        assert errors["none"] > 2 * errors["biases"], (seed, errors)
+        assert errors["biases"] < 0.006 * distance, (seed, errors)  # measured 0.52, 0.21 and 0.41 %
+        assert errors["none"] > 2 * errors["biases"], (seed, errors)  # measured 3.0, 10.4 and 3.0 times
 
 
 def test_the_filter_with_bias_states_is_consistent_over_40_drift_seeds():
@@ -345,4 +361,5 @@ def test_bad_tracking_messages_are_dropped_and_counted():
                              "tracking: step over a gap": 1}
     assert fused.refused == 1  # the jump
     assert np.isfinite(fused.trajectory.positions).all()
-    assert np.hypot(*(fused.trajectory.positions[-1, :2] - truth[-1, :2])) < 0.01
+    # measured 0.29 mm, the clean stream's 0.31 mm
+    assert np.hypot(*(fused.trajectory.positions[-1, :2] - truth[-1, :2])) < 1e-3

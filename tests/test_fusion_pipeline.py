@@ -88,6 +88,12 @@ def test_a_missing_mount_or_topic_is_an_error_before_any_frame(tmp_path):
 def test_the_fused_route_runs_with_the_config_mount_and_reports_it(tmp_path):
     result = run(_bag(tmp_path, tf_static=False), _fused_config(MOUNT), progress=False)
     assert result.fused is not None and len(result.trajectory) == 5
+    # the floor measures nothing on the noise frames, so the path is the tracking camera's: base_link drove 0.4 m/s
+    # straight ahead (measured 13 micrometres short at most, the filter starting from rest; .ci/fp-path's too)
+    trajectory = result.trajectory
+    np.testing.assert_allclose(trajectory.positions[:, 0], 0.4 * trajectory.times, rtol=0, atol=3e-5)
+    np.testing.assert_allclose(trajectory.positions[:, 1:], 0.0, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(trajectory.yaw, 0.0, rtol=0, atol=1e-9)
     summary = result.summary()
     assert summary["fusion"]["mount"] == "config (fusion.tracking_mount)"
     assert summary["fusion"]["refused_by_nis_gate"] == 0

@@ -44,12 +44,14 @@ def _final_error(trajectory, truth) -> tuple[float, float, float]:
 
 
 def test_exact_and_rigid_follow_the_sample_with_its_reverse_and_spin(sample):
+    """Bounds of twice the measured final error (the same on the avx2 and sse4 paths, .ci/fp-path): gpo-exact 0.023 %
+    and 0.088 deg, gpo-rigid 0.137 % and 0.50 deg on the sample's 3.26 m."""
     path, _, truth = sample
-    for method in ("gpo-exact", "gpo-rigid"):
+    for method, bound_percent, bound_deg in (("gpo-exact", 0.05, 0.2), ("gpo-rigid", 0.3, 1.0)):
         result = run(path, load_config().replace(method=method), progress=False)
         position, heading, distance = _final_error(result.trajectory, truth)
-        assert position / distance < 0.003, method
-        assert abs(np.degrees(heading)) < 1.0, method
+        assert 100 * position / distance < bound_percent, method
+        assert abs(np.degrees(heading)) < bound_deg, method
         assert result.summary()["frames_measured"] == len(result.records) - 1
 
 
@@ -58,7 +60,7 @@ def test_the_papers_model_reads_reverse_driving_as_forward(sample):
     result = run(path, load_config().replace(method="gpo"), progress=False)
     assert result.error is None and result.summary()["frames_measured"] == len(result.records) - 1
     position, _, distance = _final_error(result.trajectory, truth)
-    assert position / distance > 0.1  # the sample's reverse leg and spin are read wrongly
+    assert position / distance > 0.1  # the sample's reverse leg and spin are read wrongly: measured 32 %
 
 
 def _write(path, frames, stamps, images=None, format="ros1"):
@@ -78,7 +80,7 @@ def test_every_bag_format_gives_the_same_trajectory(sample, tmp_path, format):
     result = run(bag, progress=False)
     reference = run(_write(tmp_path / "reference.bag", frames, [f.stamp_ns for f in frames]), progress=False)
     np.testing.assert_array_equal(result.trajectory.positions, reference.trajectory.positions)
-    assert result.trajectory.path_length > 0.3
+    assert result.trajectory.path_length > 0.3  # measured 0.67 m: a path, not one left standing
 
 
 def test_duplicates_gaps_and_a_floor_without_texture_are_flagged_and_the_run_goes_on(sample, tmp_path):
@@ -182,13 +184,15 @@ def test_cli_run_writes_trajectory_and_summary_and_a_bag_with_the_estimate(sampl
     np.testing.assert_allclose(estimate.positions, written.positions, atol=1e-9)
 
 
-@pytest.mark.parametrize(("route", "bound"), [("ortho-gpi", 0.002), ("gpi", 0.003)])
-def test_the_chessboard_routes_follow_the_sample(sample, route, bound):
+# bounds of twice the measured final error (on the avx2 and sse4 paths too, .ci/fp-path): the ortho-GPI 0.027 % and
+# 0.054 deg, the plain GPI, metric only near its four corners, 0.149 % and 0.415 deg
+@pytest.mark.parametrize(("route", "bound_percent", "bound_deg"), [("ortho-gpi", 0.06, 0.11), ("gpi", 0.3, 0.83)])
+def test_the_chessboard_routes_follow_the_sample(sample, route, bound_percent, bound_deg):
     path, _, truth = sample
     result = run(path, route_config("gpo-exact", route), progress=False)
     position, heading, distance = _final_error(result.trajectory, truth)
     assert result.config.route == route
-    assert position / distance < bound and abs(np.degrees(heading)) < 1.0
+    assert 100 * position / distance < bound_percent and abs(np.degrees(heading)) < bound_deg
 
 
 def test_a_chessboard_route_needs_a_readable_board_image(tmp_path):
@@ -214,7 +218,8 @@ def test_fused_runs_the_floor_odometry_and_the_tracking_camera_through_the_ekf(s
         tracking = tracking_path(recorded, config.fusion)
     fused, _, _ = _final_error(result.trajectory, truth)
     camera = final_error(tracking, truth).position_m
-    assert fused < 0.5 * camera  # the floor's exact arcs (0.3 mm off at the end) pull the camera's 2 % scale error in
+    # the floor's exact arcs pull the camera's 2 % scale error in: measured 0.64 mm against the camera's 13.3 mm
+    assert fused < 0.1 * camera
     bag = _write(tmp_path / "no-odometry.bag", frames[:5], [f.stamp_ns for f in frames[:5]])
     with pytest.raises(ValueError, match="/camera/odom/sample"):
         run(bag, config.replace(method="fused"), progress=False)

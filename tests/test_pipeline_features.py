@@ -31,8 +31,10 @@ def test_keypoints_on_a_wood_floor_follow_the_truth(wood):
     result = run(bag, load_config(CONFIG), progress=False)
     assert all(record.status in ("first", "measured") for record in result.records)
     error = final_error(result.trajectory, truth)
-    assert error.percent < 0.2
-    assert evaluate(result.trajectory, truth).heading_rmse_deg < 0.5
+    # measured 0.026 % (1.1 mm) and a heading RMSE of 0.075 deg (0.027 % and 0.076 deg on the sse4 path, .ci/fp-path),
+    # as benchmarks/results/features_odometry.json gives them: bounds of twice the measured
+    assert error.percent < 0.05
+    assert evaluate(result.trajectory, truth).heading_rmse_deg < 0.15
 
 
 def test_the_floor_image_route_follows_the_truth_too(wood):
@@ -40,7 +42,7 @@ def test_the_floor_image_route_follows_the_truth_too(wood):
     config = load_config(CONFIG)
     on_floor_image = config.replace(route="analytic", features=dataclasses.replace(config.features, roi=None))
     result = run(bag, on_floor_image, progress=False)
-    assert final_error(result.trajectory, truth).percent < 0.3
+    assert final_error(result.trajectory, truth).percent < 0.09  # measured 0.044 % (1.9 mm): twice that
 
 
 def test_keypoints_detected_beforehand_give_the_same_path(wood):
@@ -73,7 +75,9 @@ def test_a_floor_without_keypoints_is_flagged_to_the_end():
     summary = result.summary()
     assert summary["frames_measured"] == 0 and summary["frames_coasted"] + summary["frames_held"] > 0
     assert set(summary["flags"]) == {"too few keypoints"}
-    assert np.isfinite(result.trajectory.positions).all()
+    assert summary["flagged"] == f"measured 0 of {frames - 1} steps between frames"
+    # no motion was ever measured, so none is coasted on: the path stays where it began, no invented one
+    assert not result.trajectory.positions.any() and not result.trajectory.yaw.any()
 
 
 def test_features_config_round_trip_and_its_rules(tmp_path):
@@ -115,8 +119,10 @@ def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
     assert row.frames == 51
     assert row.paper.samples == 51
     assert row.paper.distance_m == pytest.approx(0.5, abs=1e-3)
-    assert row.paper.final_error_mm < 2.0 and row.paper.positioning_rmse_mm < 2.0
-    assert row.paper.relative_error_percent < 10.0  # per 10 mm step
+    # measured 0.83 mm, an RMSE of 0.46 mm and 0.455 % per 10 mm step (0.80 mm, 0.44 mm and 0.451 % on the sse4 path,
+    # .ci/fp-path; benchmarks/results/second_paper.json's shipped pipeline too): bounds of twice the measured
+    assert row.paper.final_error_mm < 1.7 and row.paper.positioning_rmse_mm < 1.0
+    assert row.paper.relative_error_percent < 1.0  # per 10 mm step
 
 
 def test_unknown_experiments_are_named():

@@ -124,8 +124,8 @@ def test_a_new_estimator_runs_end_to_end(registered, tmp_path, capsys):
     index = np.searchsorted(truth.stamps_ns, result.trajectory.stamps_ns)
     travelled = truth.positions[index[-1], :2] - truth.positions[index[0], :2]
     estimated = result.trajectory.positions[-1, :2] - result.trajectory.positions[0, :2]
-    assert np.linalg.norm(travelled) > 0.3
-    assert np.linalg.norm(estimated - travelled) < 0.01 * np.linalg.norm(travelled)
+    assert np.linalg.norm(travelled) > 0.3  # 0.67 m straight ahead, where a translation alone is the motion
+    assert np.linalg.norm(estimated - travelled) < 4e-4 * np.linalg.norm(travelled)  # measured 1.6e-4 of it
 
     out = tmp_path / "toy.tum"
     arguments = ["run", str(sample), "--config", str(written), "--method", MeanTranslation.NAME, "--out", str(out)]

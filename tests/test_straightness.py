@@ -29,9 +29,9 @@ def test_lines_in_space_are_straight_only_through_the_true_model():
     pixels, valid = T265_LIKE.project(grid)
     assert valid.all()
     lines = [*pixels, *pixels.transpose(1, 0, 2)]
-    assert line_residuals_deg(T265_LIKE, lines).max() < 1e-9
+    assert line_residuals_deg(T265_LIKE, lines).max() < 1e-9  # measured 3e-14 deg: rounding
     wrong = dataclasses.replace(T265_LIKE, alpha=0.5)
-    assert np.sqrt(np.mean(line_residuals_deg(wrong, lines) ** 2)) > 0.2
+    assert np.sqrt(np.mean(line_residuals_deg(wrong, lines) ** 2)) > 0.2  # measured 0.45 deg
 
 
 def test_real_tum_vi_aprilgrid_is_straight_through_basalts_eucm(fetch_or_skip):
@@ -43,4 +43,4 @@ def test_real_tum_vi_aprilgrid_is_straight_through_basalts_eucm(fetch_or_skip):
     camera = load_basalt(datasets.tumvi_eucm_calibration())[0]
     eucm = np.sqrt(np.mean(line_residuals_deg(camera, lines) ** 2))
     pinhole = np.sqrt(np.mean(line_residuals_deg(dataclasses.replace(camera, alpha=0.0, beta=1.0), lines) ** 2))
-    assert eucm < 0.3 and pinhole > 1.5 * eucm
+    assert eucm < 0.3 and pinhole > 1.5 * eucm  # measured 0.21 deg, and 1.63 times that through a pinhole

@@ -61,9 +61,9 @@ def test_the_ortho_gpi_corrects_the_gpi_on_a_placement_it_never_saw(table):
     assert truth == pytest.approx((80.0, 40.0, 3200.0))
     second = {row.image: row for row in rows if row.where == "second"}
     gpi_area, ortho_area = (abs(second[name].area_mm2 - truth[2]) for name in ("GPI", "ortho-GPI"))
-    assert gpi_area > 10.0  # tens of mm^2: the miscalibrated, hand-picked GPI
-    assert ortho_area < gpi_area / 5
-    assert abs(second["ortho-GPI"].long_mm - truth[0]) < 0.2
+    assert gpi_area > 10.0  # tens of mm^2: the miscalibrated, hand-picked GPI (measured 73 mm^2)
+    assert ortho_area < gpi_area / 10  # measured 4.5 mm^2, a sixteenth
+    assert abs(second["ortho-GPI"].long_mm - truth[0]) < 0.15  # measured 0.071 mm
 
 
 def test_the_format_prints_the_papers_rows_first(table):
