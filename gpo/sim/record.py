@@ -203,6 +203,9 @@ PRESETS = {
         )
         for k, sheets in ((1, 5), (2, 8), (3, 7))  # a sheet in the GPI's floor patch in 40-50 % of the frames
     },
+    "glossy": Preset(
+        "t265", "short2", "industrial", 60, "the fisheye rig over polished screed mirroring the ceiling's lamps, 4.5 m"
+    ),
     **{
         f"long{k}": Preset(
             "t265", f"long{k}", "raised", 20 + k, f"the fisheye rig, 12-17 m path {k} (Test{k + 3})", exposure_s=0.006
