@@ -134,10 +134,11 @@ def alias_bomb(width: int, depth: int) -> str:
 @st.composite
 def text_mutated(draw, text: str) -> tuple[str, str]:
     """``text`` cut short, a line dropped, doubled, moved or indented, a syntax token put in, an alias bomb added or
-    put in its place, or a structure that holds itself; what was done."""
+    put in its place, a structure that holds itself, or lists nested thousands deep; what was done."""
     lines = text.splitlines(keepends=True) or [""]
     line = draw(st.integers(0, len(lines) - 1))
-    kind = draw(st.sampled_from(("cut", "drop", "double", "move", "indent", "token", "token", "bomb", "itself")))
+    kinds = ("cut", "drop", "double", "move", "indent", "token", "token", "bomb", "itself", "deep")
+    kind = draw(st.sampled_from(kinds))
     if kind == "cut":
         at = draw(st.integers(0, len(text)))
         return text[:at], f"text cut at character {at}"
@@ -161,6 +162,9 @@ def text_mutated(draw, text: str) -> tuple[str, str]:
         bomb = alias_bomb(draw(st.integers(2, 12)), draw(st.integers(1, 12)))
         whole = draw(st.booleans())
         return (bomb if whole else text + "\n" + bomb), f"alias bomb {'in place of' if whole else 'after'} the text"
+    if kind == "deep":
+        at, depth = draw(st.integers(0, len(text))), draw(st.sampled_from((50, 500, 5000, 50_000)))
+        return text[:at] + "[" * depth + "]" * depth + text[at:], f"{depth} nested lists put in at character {at}"
     return text + "\nitself: &itself [*itself, {loop: *itself}]\n", "a list that holds itself added"
 
 

@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import math
 import resource
 import signal
+import struct
 import tempfile
 import traceback
 import warnings
@@ -201,7 +203,8 @@ def _read(target: Target, mutant: Mutant, entry: Path) -> tuple[object, Finding 
 
 @st.composite
 def byte_mutation(draw, content: bytes, hot: tuple[int, ...] = ()) -> tuple[bytes, str]:
-    """``content`` truncated, bit-flipped, overwritten, cut or doubled in a span; (the bytes, what was done). Offsets
+    """``content`` truncated, bit-flipped, overwritten, cut or doubled in a span, or a number no file holds written
+    into it (NaN, infinity, a huge count); (the bytes, what was done). Offsets
     fall anywhere, or (half the time, when given) within 64 bytes after one of the ``hot`` offsets: where a record's
     lengths and header are."""
     size = len(content)
@@ -211,10 +214,14 @@ def byte_mutation(draw, content: bytes, hot: tuple[int, ...] = ()) -> tuple[byte
             return min(size, draw(st.sampled_from(hot)) + draw(st.integers(0, 63)))
         return draw(st.integers(0, size))
 
-    kind = draw(st.sampled_from(("truncate", "flip", "overwrite", "cut", "double", "insert")))
+    kind = draw(st.sampled_from(("truncate", "flip", "overwrite", "cut", "double", "insert", "number")))
     start = offset()
     if kind == "truncate":
         return content[:start], f"truncated to {start} of {size} bytes"
+    if kind == "number":  # a float64 or a count of records no file holds
+        value = draw(st.sampled_from((math.nan, math.inf, -math.inf, 1e308, -0.0, 5e-324, 2**31 - 1, 2**32 - 1)))
+        packed = struct.pack("<d", value) if isinstance(value, float) else struct.pack("<I", value)
+        return content[:start] + packed + content[start + len(packed):], f"{value!r} written at {start}"
     if kind == "flip":
         flips = [(offset(), draw(st.integers(0, 7))) for _ in range(draw(st.integers(1, 8)))]
         changed = bytearray(content)
