@@ -375,7 +375,8 @@ def test_the_scheduler_going_away_stops_the_sweep_keeping_every_finished_run(bag
             def scheduler_gone(row: dict) -> None:
                 first_cluster.kill(first_cluster.scheduler)
 
-            with pytest.raises(ConnectionError, match=r"the Dask scheduler went away \(1 of this sweep's runs finished before\)"):
+            gone = r"the Dask scheduler went away \(1 of this sweep's runs finished before\)"
+            with pytest.raises(ConnectionError, match=gone):
                 sweep(runs, out, client, progress=False, on_result=scheduler_gone)
     finally:
         first_cluster.close()

@@ -8,7 +8,7 @@ the same inputs on every run. benchmarks/fuzz_campaign.py draws many more.
 """
 
 import pytest
-from fuzzing import HANG_S, TARGETS, Finding, examine
+from fuzzing import TARGETS, Finding, examine
 from fuzzing.bags import bag_mutants
 from fuzzing.commands import run_process
 from fuzzing.documents import file_mutants, tum_seeds
@@ -61,4 +61,3 @@ def test_a_command_as_a_process_exits_cleanly(command, mutants):
         assert finding is None, shown(finding)
 
     run()
-    assert HANG_S == 10.0  # the issue's limit

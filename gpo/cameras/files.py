@@ -53,6 +53,19 @@ MAX_BYTES = 1_000_000
 """The largest YAML or JSON file read (a config, a calibration, a sweep's spec), bytes."""
 MAX_NODES = 100_000
 """The most YAML nodes a file may hold once its aliases are expanded."""
+MAX_DEPTH = 100
+"""The deepest a YAML file's lists and mappings written in brackets may nest (deeper, PyYAML takes seconds to find it
+cannot build them)."""
+
+
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader, refusing brackets nested deeper than ``MAX_DEPTH`` as it meets them."""
+
+    def fetch_flow_collection_start(self, TokenClass):
+        if self.flow_level >= MAX_DEPTH:
+            raise yaml.scanner.ScannerError(problem=f"lists or mappings nested deeper than {MAX_DEPTH}",
+                                            problem_mark=self.get_mark())
+        super().fetch_flow_collection_start(TokenClass)
 
 
 def read_text(path, kind: str) -> str:
@@ -73,13 +86,13 @@ def read_text(path, kind: str) -> str:
 
 def read_yaml(path) -> Any:
     """The YAML document of the file ``path`` (a config, a calibration, a sweep's spec); errors name the file (and the
-    line, for YAML errors). A document nested too deeply, or whose aliases would expand beyond ``MAX_NODES`` nodes (a
-    "billion laughs"), is refused before it is built."""
+    line, for YAML errors). A document nested deeper than ``MAX_DEPTH``, or whose aliases would expand beyond
+    ``MAX_NODES`` nodes (a "billion laughs"), is refused before it is built."""
     path = Path(path)
     text = read_text(path, "YAML file")
     loader = None
     try:
-        loader = yaml.SafeLoader(text)  # checks the characters at once
+        loader = _Loader(text)  # checks the characters at once
         node = loader.get_single_node()
         if node is not None and _expanded_nodes(node, {}) > MAX_NODES:
             raise ValueError(f"{path}: its aliases expand to more than {MAX_NODES} YAML nodes; refused")

@@ -233,8 +233,8 @@ def sql_mutated(draw, mutant: Mutant) -> Mutant:
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "bag.db3"
         path.write_bytes(mutant.content(name))
-        with contextlib.closing(sqlite3.connect(path)) as database, contextlib.suppress(sqlite3.Error):
-            database.execute(statement, values)  # an error: a table the seed does not have
+        with contextlib.closing(sqlite3.connect(path)) as database, contextlib.suppress(sqlite3.Error, ValueError):
+            database.execute(statement, values)  # an error: a table it lacks, a database already damaged
             database.commit()
         changed = path.read_bytes()
     shown = [v if not isinstance(v, bytes) else f"<{len(v)} bytes>" for v in values]

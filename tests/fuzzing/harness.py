@@ -174,7 +174,8 @@ def examine(target: Target, mutant: Mutant, unclear: bool | None = None) -> tupl
         if finding is None and (target.names_file if unclear is None else unclear):
             vague = [error for error in refusals(result) if folder.name not in str(error)]
             if vague:
-                finding = Finding(target.name, "unclear error", f"names no file: {vague[0]!r}", mutant)
+                detail = f"names no file: {type(vague[0]).__name__}: {vague[0]}"
+                finding = Finding(target.name, "unclear error", detail, mutant)
     return result, finding
 
 
@@ -192,7 +193,9 @@ def _read(target: Target, mutant: Mutant, entry: Path) -> tuple[object, Finding 
         return error, Finding(target.name, "traceback", "".join(traceback.format_exception(error)), mutant)
     if target.check is not None:
         try:
-            target.check(result, mutant)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                target.check(result, mutant)
         except AssertionError as wrong:
             return result, Finding(target.name, "wrong result", str(wrong), mutant)
     return result, None
