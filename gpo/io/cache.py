@@ -104,7 +104,12 @@ def write(target: Path, save: Callable[[Path], object]) -> Path:
             checksum.seal(target, of=partial)  # the seal first: a file in place is always sealed
             if partial.is_dir():
                 _remove(target)  # a folder is not renamed over another
-            partial.replace(target)
+            try:
+                partial.replace(target)
+            except OSError:  # a folder: unless another process's landed there meanwhile, intact
+                if not intact(target):
+                    raise
+                _remove(partial)
     except BaseException:
         _remove(partial)
         raise
