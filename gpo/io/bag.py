@@ -129,22 +129,26 @@ class Recording:
         except _DAMAGED as error:
             hint = _repair_hint(self.path)
             raise ValueError(f"{self.path} is not a readable {self.format} recording ({error}).{hint}") from error
-        self._check_connections()
+        self._check_index()
         if self.reader.message_count == 0:
             self.close()
             raise ValueError(f"{self.path} holds no messages: expected a recording with at least one")
 
-    def _check_connections(self) -> None:
-        """Each topic named by text, of a type named by text, counted by a whole number: a damaged ROS 2
-        ``metadata.yaml`` may say otherwise."""
+    def _check_index(self) -> None:
+        """Each topic named by text, of a type named by text, counted by a whole number, and the first and last
+        times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say otherwise."""
+        problem = None
         for connection in self.reader.connections:
             fields = (connection.topic, connection.msgtype, connection.msgcount)
             if not (isinstance(fields[0], str) and isinstance(fields[1], str) and isinstance(fields[2], int)):
-                self.close()
-                raise ValueError(
-                    f"{self.path} is damaged: a topic {fields[0]!r:.60} of type {fields[1]!r:.60} with "
-                    f"{fields[2]!r:.20} messages; expected names and a count.{_repair_hint(self.path)}"
-                )
+                problem = (f"a topic {fields[0]!r:.60} of type {fields[1]!r:.60} with {fields[2]!r:.20} messages; "
+                           "expected names and a count")
+        times = (self.reader.start_time, self.reader.end_time)
+        if not all(isinstance(time, int) and -(2**63) <= time < 2**63 for time in times):
+            problem = f"its first and last times are {times[0]!r:.30} and {times[1]!r:.30}; expected nanoseconds"
+        if problem:
+            self.close()
+            raise ValueError(f"{self.path} is damaged: {problem}.{_repair_hint(self.path)}")
 
     def close(self) -> None:
         """Close the recording's files."""
