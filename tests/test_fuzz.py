@@ -11,8 +11,8 @@ import pytest
 from fuzzing import TARGETS, Finding, examine
 from fuzzing.bags import bag_mutants
 from fuzzing.commands import run_process
-from fuzzing.documents import file_mutants, tum_seeds
 from fuzzing.harness import Mutant, Target
+from fuzzing.tum import tum_mutants
 from hypothesis import HealthCheck, given, settings
 
 EXAMPLES = {
@@ -48,7 +48,7 @@ def test_a_reader_gives_a_clear_error_or_a_correct_result(name):
 
 
 @pytest.mark.parametrize(
-    ("command", "mutants"), [("info", bag_mutants("ros1")), ("evaluate", file_mutants(tum_seeds()))]
+    ("command", "mutants"), [("info", bag_mutants("ros1")), ("evaluate", tum_mutants())]
 )
 def test_a_command_as_a_process_exits_cleanly(command, mutants):
     """The command run as users run it, its own process ended after HANG_S seconds."""

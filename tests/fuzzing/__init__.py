@@ -9,10 +9,11 @@ never imports it, nor hypothesis.
 
 from fuzzing.bags import BAG_TARGETS
 from fuzzing.commands import COMMAND_TARGETS
-from fuzzing.documents import DOCUMENT_TARGETS
 from fuzzing.harness import DOCUMENTED_ERRORS, HANG_S, KINDS, Finding, Mutant, Target, examine
+from fuzzing.readers import READER_TARGETS
+from fuzzing.tum import TUM_TARGETS
 
-TARGETS = {target.name: target for target in (*BAG_TARGETS, *DOCUMENT_TARGETS, *COMMAND_TARGETS)}
+TARGETS = {target.name: target for target in (*BAG_TARGETS, *READER_TARGETS, *TUM_TARGETS, *COMMAND_TARGETS)}
 """Every reader fuzzed, and the commands that read bags and TUM files, by name."""
 
 __all__ = ["DOCUMENTED_ERRORS", "HANG_S", "KINDS", "TARGETS", "Finding", "Mutant", "Target", "examine"]

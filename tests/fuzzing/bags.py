@@ -22,8 +22,9 @@ import cv2
 import numpy as np
 from hypothesis import strategies as st
 
-from fuzzing.documents import check_cameras, yaml_mutated
+from fuzzing.documents import yaml_mutated
 from fuzzing.harness import Mutant, Target, bytes_mutated, parts
+from fuzzing.readers import check_cameras
 from gpo.cameras import T265_LIKE, CameraModel
 from gpo.io.bag import Frame, Recording, describe
 from gpo.io.bag_writer import BagWriter

@@ -18,8 +18,9 @@ from pathlib import Path
 from hypothesis import strategies as st
 
 from fuzzing.bags import bag_mutants
-from fuzzing.documents import DATA, file_mutants, tum_seeds
+from fuzzing.documents import DATA
 from fuzzing.harness import HANG_S, Hang, Target
+from fuzzing.tum import tum_mutants
 from gpo.cli import main
 
 REPOSITORY = Path(__file__).resolve().parents[2]
@@ -65,7 +66,7 @@ def run_process(command: str, path: Path) -> tuple[int, str]:
 
 def command_target(command: str) -> Target:
     """The command ``command`` in this process, on the mutants of what it reads."""
-    mutants = bag_mutants("ros1") if command == "info" else st.deferred(lambda: file_mutants(tum_seeds()))
+    mutants = bag_mutants("ros1") if command == "info" else st.deferred(tum_mutants)
     return Target(f"gpo {command}", mutants, lambda path: run_here(command, path), names_file=False)
 
 
