@@ -1,7 +1,9 @@
 """gpo.batch: sweeps on a local two-worker cluster and on a scheduler and workers started as processes of their own
-(127.0.0.1), resumption after a worker is killed mid-sweep, failing runs kept with their error; the numbers checked
+(127.0.0.1), resumption after a worker is killed mid-sweep, after the scheduler goes away and after the disk fills,
+runs and tables damaged after they were written made again, failing runs kept with their error; the numbers checked
 against the same run made directly through gpo.pipeline and gpo.metrics."""
 
+import errno
 import os
 import signal
 import subprocess
@@ -354,3 +356,90 @@ def test_a_worker_killed_mid_sweep(bags, process_cluster, tmp_path):
     for _, row in result.table.iterrows():  # each run's number, the lost one's too, as the run made directly gives it
         expected = direct_final_error_m(bags[row["recording"]], {"klt.window_px": int(row["param.klt.window_px"])})
         assert row["final_error_m"] == pytest.approx(expected, abs=1e-12), row["key"]
+
+
+# ----------------------------------------------------------------------------------------------- faults
+
+
+def truncated(path: Path) -> None:
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+
+
+def bit_flipped(path: Path) -> None:
+    data = bytearray(path.read_bytes())
+    data[len(data) // 3] ^= 0x10
+    path.write_bytes(bytes(data))
+
+
+def test_runs_and_a_table_damaged_after_the_sweep_are_made_again(bags, tmp_path):
+    runs = [Run(bags["early"], "early", overrides={"klt.window_px": w}) for w in (15, 21, 31)]
+    out = tmp_path / "results"
+    with cluster_client(workers=1) as client:
+        first = sweep(runs, out, client, progress=False)
+        keys = sorted(first.executed)
+        truncated(out / "runs" / keys[0] / "row.json")  # a crash mid-write on another machine
+        bit_flipped(out / "runs" / keys[1] / "trajectory.tum")  # a bad copy
+        again = sweep(runs, out, client, progress=False)
+    assert sorted(again.executed) == keys[:2] and again.reused == [keys[2]]  # the damaged runs, run again
+    columns = ["key", "status", "frames", "final_error_m", "ape_rmse_m"]
+    assert again.table[columns].equals(first.table[columns])  # the same numbers: the runs are deterministic
+    bit_flipped(out / "results.parquet")
+    assert read_table(out)[columns].equals(first.table[columns])  # made again from the runs' rows
+
+
+def test_a_full_disk_stops_the_sweep_keeping_every_finished_run(bags, tmp_path, monkeypatch):
+    runs = [Run(bags["early"], "early", overrides={"klt.window_px": w}) for w in (15, 21, 31)]
+    out = tmp_path / "results"
+    write_text, kept = Path.write_text, []
+
+    def full_at_the_second_row(path: Path, text: str, *args, **kwargs):
+        if path.name == "row.json" and len(kept) == 1:
+            write_text(path, text[: len(text) // 2])  # what fitted
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        if path.name == "row.json":
+            kept.append(path)
+        return write_text(path, text, *args, **kwargs)
+
+    with cluster_client(workers=1) as client:
+        monkeypatch.setattr(Path, "write_text", full_at_the_second_row)
+        with pytest.raises(OSError, match="No space left on device") as stopped:
+            sweep(runs, out, client, progress=False)
+        monkeypatch.undo()
+        left = sorted(path.name for path in (out / "runs").iterdir())
+        table = read_table(out)
+        resumed = sweep(runs, out, client, progress=False)
+    message = str(stopped.value)
+    assert "every run finished before it is kept in" in message and str(out) in message and "make room" in message
+    assert len(table) == 1 and left == [table["key"][0], f"{table['key'][0]}.crc32"]  # the half-written run: gone
+    assert resumed.reused == table["key"].tolist() and len(resumed.executed) == 2
+    assert resumed.table["status"].tolist() == ["ok"] * 3
+
+
+def test_the_scheduler_going_away_stops_the_sweep_keeping_every_finished_run(bags, tmp_path):
+    runs = [Run(bags[name], name, overrides={"klt.window_px": w}) for name in ("early", "late") for w in (15, 21)]
+    out = tmp_path / "results"
+    first_cluster = ProcessCluster(tmp_path, workers=1)
+    try:
+        with cluster_client(first_cluster.address) as client:
+            first_cluster.wait_for_workers(client, 1)
+
+            def scheduler_gone(row: dict) -> None:
+                first_cluster.kill(first_cluster.scheduler)
+
+            gone = r"the Dask scheduler went away \(1 of this sweep's runs finished before\)"
+            with pytest.raises(ConnectionError, match=gone):
+                sweep(runs, out, client, progress=False, on_result=scheduler_gone)
+    finally:
+        first_cluster.close()
+    kept = read_table(out)
+    (tmp_path / "second").mkdir()
+    second_cluster = ProcessCluster(tmp_path / "second", workers=2)
+    try:
+        with cluster_client(second_cluster.address) as client:
+            second_cluster.wait_for_workers(client, 2)
+            resumed = sweep(runs, out, client, progress=False)
+    finally:
+        second_cluster.close()
+    assert kept["status"].tolist() == ["ok"]  # the run finished before the scheduler went away
+    assert resumed.reused == kept["key"].tolist() and len(resumed.executed) == 3
+    assert resumed.table["status"].tolist() == ["ok"] * 4

@@ -1,18 +1,27 @@
-"""The one cache: one environment variable, one folder per kind, one key scheme, files renamed into place."""
+"""The one cache: one environment variable, one folder per kind, one key scheme, files sealed and renamed into place;
+a recording, table or floor run damaged after it was made (cut short, a bit turned) is made again, never read."""
 
+import dataclasses
 import hashlib
+import io
 import json
 import os
+import zlib
 from pathlib import Path
 
 import numpy as np
 import pooch
 import pytest
 
+import gpo.experiments.runs as experiment_runs
+from gpo.experiments.runs import floor_run, route_config
 from gpo.floor_image.analytic import analytic_table
 from gpo.floor_image.image import FloorImage
-from gpo.io import cache, datasets
+from gpo.io import cache, checksum, datasets
 from gpo.io.fingerprint import sources as module_sources
+from gpo.sim import record
+from gpo.sim.plans import MotionPlan
+from gpo.sim.record import PRESETS, Setup, recording
 from gpo.sim.rigs import t265_rig
 
 
@@ -66,10 +75,11 @@ def test_write_renames_a_complete_file_into_place_and_keeps_the_first(tmp_path):
         np.savez(partial, value=np.arange(3))
 
     assert cache.write(target, save) == target
-    assert [path.name for path in target.parent.iterdir()] == [target.name]
+    sealed = [target.name, f"{target.name}.crc32"]  # the file and its seal
+    assert sorted(path.name for path in target.parent.iterdir()) == sealed
     cache.write(target, lambda partial: np.savez(partial, value=np.arange(5)))  # another process, second
     assert np.load(target)["value"].tolist() == [0, 1, 2]
-    assert [path.name for path in target.parent.iterdir()] == [target.name]
+    assert sorted(path.name for path in target.parent.iterdir()) == sealed
 
 
 def test_a_failed_write_leaves_nothing(tmp_path):
@@ -89,7 +99,9 @@ def test_tables_and_downloads_live_under_the_one_variable(tmp_path, monkeypatch)
     monkeypatch.delenv("GPO_DATA_DIR", raising=False)
     rig = t265_rig()
     table = analytic_table(rig.camera, rig.mount, FloorImage.top_view(metres_per_pixel=4e-3))
-    assert [path.name for path in (tmp_path / "tables").iterdir()] == [f"table-{table.key}.npz"]
+    assert sorted(path.name for path in (tmp_path / "tables").iterdir()) == [
+        f"table-{table.key}.npz", f"table-{table.key}.npz.crc32"
+    ]
     assert datasets.data_dir() == tmp_path / "datasets"
     monkeypatch.setenv("GPO_DATA_DIR", str(tmp_path / "copies"))  # the real-data folder stays a folder of its own
     assert datasets.data_dir() == tmp_path / "copies"
@@ -117,3 +129,98 @@ def test_the_oldest_files_that_can_be_made_again_go_when_the_cache_is_full(tmp_p
     assert new.read_bytes() == b"y" * 1000
     assert cache.evict(max_bytes=0) == [made["bag2"], made["run"], folder_bag, new]  # oldest first, keep aside
     assert cache.evict(keep=None, max_bytes=0) == [] and made["download"].exists()
+
+
+# ------------------------------------------------------------------------------------- damaged after it was made
+
+
+def tiny_setup() -> Setup:
+    """The test preset's first segment seen at 3 frames a second on a small floor: a recording of 6 frames."""
+    setup = PRESETS["test"].setup()
+    return dataclasses.replace(
+        setup, rig=dataclasses.replace(setup.rig, rate_hz=3.0), plan=MotionPlan(setup.plan.segments[:1]),
+        floor_margin_m=1.0, texel_m=2e-3,
+    )
+
+
+def truncated(path: Path) -> None:
+    """Cut ``path`` to half its bytes, as a crash mid-write or a full disk leaves it."""
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+
+
+def bit_flipped(path: Path) -> None:
+    """One bit of ``path`` turned, a third of the way in, as a bad sector or a bad copy leaves it."""
+    data = bytearray(path.read_bytes())
+    data[len(data) // 3] ^= 0x10
+    path.write_bytes(bytes(data))
+
+
+def largest_file(path: Path) -> Path:
+    """``path``, or the largest file of the folder ``path`` (a ROS 2 bag's storage file)."""
+    return max(path.iterdir(), key=lambda p: p.stat().st_size) if path.is_dir() else path
+
+
+def contents(path: Path) -> dict[str, bytes]:
+    """The bytes of the file ``path``, or of every file of the folder ``path``, by name."""
+    return {p.name: p.read_bytes() for p in (sorted(path.iterdir()) if path.is_dir() else [path])}
+
+
+def test_a_file_without_its_seal_or_unlike_it_is_not_intact(tmp_path):
+    target = cache.write(tmp_path / "runs" / "run-0123456789abcdef.npz", lambda p: np.savez(p, value=np.arange(3)))
+    content = target.read_bytes()
+    assert cache.intact(target) and checksum.sealed(target) == {target.name: (zlib.crc32(content), len(content))}
+    checksum.seal_path(target).write_text("not a seal\n")
+    assert not cache.intact(target)
+    checksum.seal_path(target).unlink()  # as a file made before files were sealed
+    assert not cache.intact(target)
+    cache.write(target, lambda p: np.savez(p, value=np.arange(3)))  # made again, sealed
+    assert cache.intact(target) and np.load(target)["value"].tolist() == [0, 1, 2]
+
+
+@pytest.mark.parametrize(("bag_format", "damage"), [("ros1", truncated), ("ros2", bit_flipped)])
+def test_a_damaged_recording_is_rendered_again_never_read(tmp_path, monkeypatch, bag_format, damage):
+    monkeypatch.setenv(cache.ENVIRONMENT_VARIABLE, str(tmp_path))
+    rendered = []
+    simulate = record.simulate
+    monkeypatch.setattr(record, "simulate", lambda *args: rendered.append(args) or simulate(*args))
+    bag = recording(tiny_setup(), bag_format, progress=False, label="tiny")
+    original = contents(bag)
+    assert recording(tiny_setup(), bag_format, progress=False, label="tiny") == bag and len(rendered) == 1
+    damage(largest_file(bag))
+    assert contents(bag) != original and not cache.intact(bag)
+    assert recording(tiny_setup(), bag_format, progress=False, label="tiny") == bag
+    assert len(rendered) == 2 and contents(bag) == original  # rendered again: the same bag, byte for byte
+
+
+@pytest.mark.parametrize("damage", [truncated, bit_flipped])
+def test_a_damaged_table_is_built_again_never_read(tmp_path, monkeypatch, damage):
+    monkeypatch.setenv(cache.ENVIRONMENT_VARIABLE, str(tmp_path))
+    rig, floor = t265_rig(), FloorImage.top_view(metres_per_pixel=4e-3)
+    table = analytic_table(rig.camera, rig.mount, floor)
+    path = cache.path("tables", "table", table.key, ".npz")
+    original = path.read_bytes()
+    damage(path)
+    again = analytic_table(rig.camera, rig.mount, floor)
+    assert path.read_bytes() == original and cache.intact(path)
+    for name in ("map_x", "map_y", "valid"):
+        assert np.array_equal(getattr(again, name), getattr(table, name))
+
+
+@pytest.mark.parametrize("damage", [truncated, bit_flipped])
+def test_a_damaged_floor_run_is_run_again_never_read(tmp_path, monkeypatch, damage):
+    monkeypatch.setenv(cache.ENVIRONMENT_VARIABLE, str(tmp_path))
+    bag = recording(tiny_setup(), progress=False, label="tiny")
+    config = route_config("gpo-exact", "analytic")
+    first = floor_run(bag, config)
+    [path] = (tmp_path / "runs").glob("*.npz")
+    original = path.read_bytes()
+    damage(path)
+    ran = []
+    run = experiment_runs.run
+    monkeypatch.setattr(experiment_runs, "run", lambda *args, **kwargs: ran.append(args) or run(*args, **kwargs))
+    again = floor_run(bag, config)
+    assert len(ran) == 1 and cache.intact(path)  # run again, and kept again
+    with np.load(io.BytesIO(original)) as kept, np.load(path) as remade:  # all but the speed it measured
+        for name in ("stamps_ns", "poses", "inliers", "spread_px"):
+            assert np.array_equal(remade[name], kept[name], equal_nan=True)
+    assert np.array_equal(again.trajectory.positions, first.trajectory.positions)

@@ -1,6 +1,8 @@
-"""Kalibr, Basalt and camera_info forms: the real published files load, and round-trip unchanged."""
+"""Kalibr, Basalt and camera_info forms: the real published files load, and round-trip unchanged; files of the wrong
+form are refused naming the file and the field."""
 
 import json
+import re
 
 import pytest
 import yaml
@@ -10,6 +12,7 @@ from gpo.cameras.files import (
     camera_from_camera_info,
     camera_info_distortion,
     load_basalt,
+    load_boofcv,
     load_kalibr,
     save_basalt,
     save_kalibr,
@@ -143,3 +146,64 @@ def test_camera_info_reads_realsense_ros_equidistant_with_a_fifth_zero_and_refus
         camera_from_camera_info("kannala", [0.1, 0.2, 0.3, 0.4], k, 848, 800, "t265")
     with pytest.raises(TypeError, match="Omni has no camera_info distortion model"):
         camera_info_distortion(Omni(400.0, 400.0, 320.0, 320.0, 1.1, (0.0,) * 4, 640, 640))
+
+
+EUCM_ENTRY = {"camera_model": "eucm", "intrinsics": [0.6, 1.1, 286.0, 286.0, 424.0, 400.0], "resolution": [848, 800]}
+
+
+@pytest.mark.parametrize(
+    ("entry", "words"),
+    [
+        ([1, 2], "cam0: expected a mapping with the field 'camera_model', got [1, 2]"),
+        (EUCM_ENTRY | {"intrinsics": "0.6 1.1"}, "cam0, intrinsics: expected a list, got '0.6 1.1'"),
+        (EUCM_ENTRY | {"intrinsics": [0.6, [1.1], 286, 286, 424, 400]}, "cam0, intrinsics: expected a number, got [1."),
+        (EUCM_ENTRY | {"intrinsics": [0.6, True, 286, 286, 424, 400]}, "cam0, intrinsics: expected a number, got Tr"),
+        (EUCM_ENTRY | {"resolution": 848}, "cam0, resolution: expected a list of 2, got 848"),
+        (EUCM_ENTRY | {"intrinsics": [2.0, 1.1, 286, 286, 424, 400]}, "cam0: alpha must lie in [0, 1], got 2.0"),
+        (EUCM_ENTRY | {"resolution": [848, -800]}, "cam0: height must be a positive whole number of pixels"),
+    ],
+)
+def test_a_kalibr_entry_of_the_wrong_form_is_named_with_its_field(tmp_path, entry, words):
+    path = tmp_path / "camchain.yaml"
+    path.write_text(yaml.safe_dump({"cam0": entry}))
+    with pytest.raises(ValueError) as refused:
+        load_kalibr(path)
+    assert str(refused.value).startswith(f"{path}, {words}")
+
+
+def test_basalt_and_boofcv_files_of_the_wrong_form_name_the_file_and_field(tmp_path):
+    basalt = tmp_path / "calib.json"
+    for document, words in [
+        ([1, 2], "expected a mapping with the field 'value0', got [1, 2]"),
+        ({"value0": {"intrinsics": {}, "resolution": []}}, "value0, intrinsics: expected a list, got {}"),
+        ({"value0": {"intrinsics": [{"camera_type": "eucm", "intrinsics": {"fx": "x"}}], "resolution": [[8, 8]]}},
+         "camera 0, fx: expected a number, got 'x'"),
+    ]:
+        basalt.write_text(json.dumps(document))
+        with pytest.raises(ValueError, match=re.escape(f"{basalt}, {words}") + "|" + re.escape(f"{basalt}: {words}")):
+            load_basalt(basalt)
+    basalt.write_bytes(b"\xff\xfe{}")
+    with pytest.raises(ValueError, match=re.escape(f"{basalt} is not a text file (UTF-8)")):
+        load_basalt(basalt)
+    boofcv = tmp_path / "boofcv.yaml"
+    boofcv.write_text("model: omnidirectional_universal\npinhole: [1, 2]\n")
+    with pytest.raises(ValueError, match=re.escape(f"{boofcv}, pinhole: expected a mapping, got [1, 2]")):
+        load_boofcv(boofcv)
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("cam0: " + "[" * 5000 + "]" * 5000 + "\n", "line 1, column 107: not valid YAML: lists or mappings nested"),
+        ("cam0: \x1d\n", "not valid YAML: unacceptable character #x001d"),
+        ("\n".join([f"l0: &l0 [{', '.join(['x'] * 10)}]"] + [f"l{k}: &l{k} [{', '.join([f'*l{k - 1}'] * 10)}]"
+                                                           for k in range(1, 7)]), "aliases expand to more than"),
+    ],
+    ids=["nested 5000 deep", "a control character", "an alias bomb"],
+)
+def test_a_calibration_is_read_as_safely_as_a_config(tmp_path, text, words):
+    """Each refused at once, naming the file (before, PyYAML's own error, or seconds of work, or memory)."""
+    path = tmp_path / "camchain.yaml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=re.escape(str(path)) + ".*" + re.escape(words)):
+        load_kalibr(path)

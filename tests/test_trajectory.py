@@ -98,3 +98,24 @@ def test_a_file_that_is_not_text_is_named_not_decoded(tmp_path):
     noise.write_bytes(bytes(range(128, 256)))
     with pytest.raises(ValueError, match=r"noise\.tum is binary data, not a TUM text file"):
         Trajectory.read_tum(noise)
+
+
+@pytest.mark.parametrize(
+    ("stamp", "read_ns"),
+    [
+        ("9223372036.854775807", 2**63 - 1),  # the last nanosecond an int64 holds
+        ("-9223372036.854775808", -(2**63)),
+        ("9223372036.854775808", None),
+        ("9" * 30, None),
+        ("1e400", None),
+        ("-1e19", None),
+    ],
+)
+def test_a_stamp_is_read_to_the_nanosecond_or_refused_with_its_line(tmp_path, stamp, read_ns):
+    path = tmp_path / "far.tum"
+    path.write_text(f"{stamp} 0 0 0 0 0 0 1\n")
+    if read_ns is not None:
+        assert Trajectory.read_tum(path).stamps_ns.tolist() == [read_ns]
+        return
+    with pytest.raises(ValueError, match=rf"far\.tum:1: the stamp '{stamp}' is not a time in seconds"):
+        Trajectory.read_tum(path)

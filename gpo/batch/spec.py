@@ -9,10 +9,10 @@ import itertools
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from gpo.batch.runs import TRUTH_TOPIC, Run, configured
+from gpo.cameras.files import read_yaml
 
 
 class _Strict(BaseModel):
@@ -116,10 +116,7 @@ def load_spec(path) -> SweepSpec:
     """The ``SweepSpec`` of a YAML file, with relative paths made relative to its folder. Raises ValueError naming
     the file and each wrong field."""
     path = Path(path)
-    try:
-        document = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as error:
-        raise ValueError(f"{path}: not YAML: {error}") from None
+    document = read_yaml(path)
     if not isinstance(document, dict):
         raise ValueError(f"{path}: a sweep spec is a mapping with recordings, config, set, vary, runs")
     try:

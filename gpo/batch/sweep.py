@@ -7,16 +7,20 @@ goes through ``gpo.pipeline.run`` and is evaluated against the recording's groun
 ``gpo.metrics.evaluate`` (the estimate's first pose placed on the truth's); the client writes, in ``out``:
 
 - ``runs/KEY/trajectory.tum``, ``runs/KEY/trajectory.summary.yaml`` (``OdometryResult.write``),
-  ``runs/KEY/config.yaml`` (the run's whole config after its overrides) and ``runs/KEY/row.json`` (its metrics);
+  ``runs/KEY/config.yaml`` (the run's whole config after its overrides) and ``runs/KEY/row.json`` (its metrics),
+  written into ``runs/KEY.partial`` and renamed once complete, and sealed (``runs/KEY.crc32``, ``gpo.io.checksum``);
 - ``results.parquet`` and ``results.csv``: one row per run, rewritten as runs finish (at most every
   ``TABLE_EVERY_S``) and at the end, also when the sweep is interrupted.
 
 KEY is a hash of the recording's content, the run's whole config and the code version (``code_version``: the
 method layer's sources), so a sweep started again skips every run already finished with that key (``row.json``
-with status ``ok`` or ``partial``) and never repeats it; runs that failed are tried again. A run that fails (a
-config the schema refuses, an unreadable bag, a recording without the truth topic) gets a row with status
-``failed`` and its ``error`` and the sweep goes on. A worker lost mid-run is replaced by Dask, which runs the
-task again elsewhere (``distributed.scheduler.allowed-failures`` times).
+with status ``ok`` or ``partial``, intact against its seal) and never repeats it; runs that failed are tried again,
+and so is a run whose folder was cut short or corrupted since. A run that fails (a config the schema refuses, an
+unreadable bag, a recording without the truth topic) gets a row with status ``failed`` and its ``error`` and the
+sweep goes on. A worker lost mid-run is replaced by Dask, which runs the task again elsewhere
+(``distributed.scheduler.allowed-failures`` times). A sweep that cannot go on stops with an error that says what
+to do, every run finished before kept: the scheduler gone (``ConnectionError``), a run's files that cannot be written
+(``OSError``: a full disk, a folder made read-only), Ctrl-C. Run it again to resume.
 
 The cluster (``cluster_client``): a ``LocalCluster`` of one single-threaded worker process per core by default,
 started without Dask's ``MALLOC_TRIM_THRESHOLD_`` (``WORKER_ENVIRONMENT_UNSET``); with a scheduler address
@@ -39,6 +43,7 @@ odometry, the evaluation) and ``code_version``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import shutil
 import time
@@ -49,6 +54,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 from distributed import as_completed
+from distributed.client import FutureCancelledError
 from tqdm.auto import tqdm
 
 from gpo.batch.runs import (
@@ -63,9 +69,11 @@ from gpo.batch.runs import (
     run_key,
 )
 from gpo.batch.table import json_number, read_rows, write_table
+from gpo.io import checksum
 from gpo.pipeline.config import config_to_dict
 
 TABLE_EVERY_S = 10.0  # while a sweep runs its table is rewritten at most this often (each run's row.json at once)
+PARTIAL = ".partial"  # a run's folder while its files are written
 
 
 @dataclass
@@ -91,13 +99,17 @@ def sweep(
 ) -> SweepResult:
     """Run every one of ``runs`` not yet finished in ``out`` on the Dask ``client``'s cluster; write each run's files
     and the table as runs finish (see the module docstring); call ``on_result(row)`` after each. Returns the table of
-    ``out``. Ctrl-C stops the sweep with every finished run kept."""
+    ``out``. Ctrl-C, a scheduler gone (ConnectionError) or a run's files that cannot be written (OSError) stop the
+    sweep with every finished run kept; the same sweep started again resumes."""
     out = Path(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     rows = {row["key"]: row for row in read_rows(out)}
     finished = {key for key, row in rows.items() if row["status"] in FINISHED}
     paths = sorted({r.recording for r in runs})
-    digests = dict(zip(paths, client.gather(client.map(_digest_or_error, paths, pure=False)), strict=True))
+    try:
+        digests = dict(zip(paths, client.gather(client.map(_digest_or_error, paths, pure=False)), strict=True))
+    except FutureCancelledError as error:
+        raise _scheduler_gone(error, out, 0) from None
     version = code_version()
     pending, reused, executed = {}, [], []
     for run_ in runs:
@@ -130,6 +142,8 @@ def sweep(
             key, run_, document = futures[future]
             try:
                 outcome = future.result()
+            except FutureCancelledError as error:
+                raise _scheduler_gone(error, out, len(executed)) from None
             except Exception as error:
                 failure = {"status": "failed", "error": f"{type(error).__name__}: {error}"}
                 outcome = Outcome(base_row(run_, key) | failure)
@@ -143,12 +157,31 @@ def sweep(
             if time.monotonic() - written > TABLE_EVERY_S:
                 write_table(out, rows.values())
                 written = time.monotonic()
-    finally:
-        bar.close()
-        for future in futures:
-            future.cancel()
-        table = write_table(out, rows.values())
-    return SweepResult(table, executed, reused)
+    except BaseException:
+        _stop(futures, bar)
+        with contextlib.suppress(OSError):  # a table that cannot be written now is made from the rows next time
+            write_table(out, rows.values())
+        raise
+    _stop(futures, bar)
+    return SweepResult(write_table(out, rows.values()), executed, reused)
+
+
+def _stop(futures, bar) -> None:
+    """Cancel the runs not finished (their workers drop them) and close the progress bar."""
+    bar.close()
+    for future in futures:
+        future.cancel()
+
+
+def _scheduler_gone(error: FutureCancelledError, out: Path, done: int) -> Exception:
+    """The error of a sweep whose client lost its scheduler (Dask cancels every run it waits on), or the
+    cancellation itself when it had another reason."""
+    if getattr(error, "reason", None) != "scheduler-connection-lost":
+        return error
+    return ConnectionError(
+        f"the Dask scheduler went away ({done} of this sweep's runs finished before): every finished run is kept "
+        f"in {out}; start the cluster again and run the same sweep to resume"
+    )
 
 
 def _digest_or_error(path: str) -> str:
@@ -160,16 +193,27 @@ def _digest_or_error(path: str) -> str:
 
 
 def _keep(out: Path, outcome: Outcome, document: dict | None) -> None:
-    """Write a run's files into ``out/runs/KEY`` (a new folder renamed into place)."""
+    """Write a run's files into ``out/runs/KEY``: a new folder, sealed and renamed into place. Raises OSError naming
+    the folder, with nothing of the run left, when its files cannot be written (a full disk, a read-only folder)."""
     final = out / "runs" / outcome.row["key"]
-    partial = final.with_name(final.name + ".partial")
-    shutil.rmtree(partial, ignore_errors=True)
-    partial.mkdir(parents=True)
-    if outcome.trajectory is not None:
-        outcome.trajectory.write_tum(partial / "trajectory.tum")
-        (partial / "trajectory.summary.yaml").write_text(yaml.safe_dump(outcome.summary, sort_keys=False))
-    if document is not None:
-        (partial / "config.yaml").write_text(yaml.safe_dump(document, sort_keys=False, default_flow_style=None))
-    (partial / "row.json").write_text(json.dumps(outcome.row, indent=1, default=json_number) + "\n")
-    shutil.rmtree(final, ignore_errors=True)
-    partial.rename(final)
+    partial = final.with_name(final.name + PARTIAL)
+    try:
+        shutil.rmtree(partial, ignore_errors=True)
+        partial.mkdir(parents=True)
+        if outcome.trajectory is not None:
+            outcome.trajectory.write_tum(partial / "trajectory.tum")
+            (partial / "trajectory.summary.yaml").write_text(yaml.safe_dump(outcome.summary, sort_keys=False))
+        if document is not None:
+            (partial / "config.yaml").write_text(yaml.safe_dump(document, sort_keys=False, default_flow_style=None))
+        (partial / "row.json").write_text(json.dumps(outcome.row, indent=1, default=json_number) + "\n")
+        checksum.seal(final, of=partial)
+        shutil.rmtree(final, ignore_errors=True)
+        partial.rename(final)
+    except OSError as error:
+        shutil.rmtree(partial, ignore_errors=True)
+        stopped = OSError(
+            f"{final}: the run's files cannot be written ({error.strerror or error}); every run finished before it "
+            f"is kept in {out}: make room (or make the folder writable) and run the same sweep again to resume"
+        )
+        stopped.errno = error.errno
+        raise stopped from error

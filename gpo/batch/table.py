@@ -1,4 +1,7 @@
 """A sweep's results as one table: ``results.parquet`` and ``results.csv``, a row per run, read and summarised.
+
+Both files are sealed (``gpo.io.checksum``) and so is each run's folder: a run whose folder is cut short or corrupted
+is not read (the sweep runs it again), and a table that is is made again from the runs' rows.
 """
 
 from __future__ import annotations
@@ -9,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from gpo.io import checksum
 
 RESULTS = ("results.parquet", "results.csv")
 
@@ -21,11 +26,10 @@ def json_number(value):
 
 
 def read_rows(out) -> list[dict]:
-    """Every run's row kept in ``out/runs``."""
-    rows = []
-    for path in sorted(Path(out).glob("runs/*/row.json")):
-        rows.append(json.loads(path.read_text()))
-    return rows
+    """Every run's row kept in ``out/runs``: of each run folder that is intact against its seal (one cut short or
+    corrupted after it was written, or still being written, counts as not run)."""
+    return [json.loads(path.read_text()) for path in sorted(Path(out).glob("runs/*/row.json"))
+            if checksum.intact(path.parent)]
 
 
 def write_table(out, rows=None) -> pd.DataFrame:
@@ -44,16 +48,24 @@ def write_table(out, rows=None) -> pd.DataFrame:
     table = table.sort_values(["recording", *parameters, "key"], na_position="first", ignore_index=True)
     for name, write in zip(RESULTS, (table.to_parquet, table.to_csv), strict=True):
         temporary = out / f".{name}.partial"
-        write(temporary, index=False)
-        temporary.replace(out / name)
+        try:
+            write(temporary, index=False)
+            checksum.seal(out / name, of=temporary)
+            temporary.replace(out / name)
+        except OSError as error:
+            temporary.unlink(missing_ok=True)
+            raise OSError(f"{out / name} cannot be written ({error.strerror or error}); the runs' rows are kept in "
+                          f"{out / 'runs'}: make room and run the sweep again to write it") from error
     return table
 
 
 def read_table(out) -> pd.DataFrame:
     """The table a sweep wrote into ``out`` (``results.parquet``). Raises FileNotFoundError naming the folder."""
     path = Path(out) / RESULTS[0]
-    if not path.is_file():
+    if not path.is_file() and not read_rows(out):
         raise FileNotFoundError(f"{path}: no sweep results here (python -m gpo sweep SPEC --out {out})")
+    if not checksum.intact(path):  # cut short or corrupted since it was written: made again from the runs' rows
+        write_table(out)
     return pd.read_parquet(path)
 
 

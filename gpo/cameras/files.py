@@ -27,6 +27,9 @@ BoofCV's camera YAML (``load_boofcv``), its unified model ``omnidirectional_univ
 cx, cy, width, height, skew), ``mirror_offset`` (xi), ``radial_tangential`` (``radial`` k1, k2; t1, t2 as
 OpenCV's p1, p2), as `Omni`.
 
+Every YAML file gpo reads (these calibrations, run configs, sweep specs) is read by ``read_yaml``: its size, its
+encoding and its aliases checked before its document is built.
+
 Every model of ``gpo.cameras.MODELS`` says how these formats name it (``CameraModel.KALIBR_MODEL`` and its
 neighbours); any other model is refused with an error that names it and the file.
 """
@@ -37,6 +40,7 @@ import copy
 import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -45,17 +49,141 @@ from gpo.cameras.omni import Omni
 
 Camera = CameraModel  # any model of ``gpo.cameras.MODELS``
 
+MAX_BYTES = 1_000_000
+"""The largest YAML or JSON file read (a config, a calibration, a sweep's spec), bytes."""
+MAX_NODES = 100_000
+"""The most YAML nodes a file may hold once its aliases are expanded."""
+MAX_DEPTH = 100
+"""The deepest a YAML file's lists and mappings written in brackets may nest (deeper, PyYAML takes seconds to find it
+cannot build them)."""
 
-def _field(entry: Mapping, key: str, where: str):
+
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader, refusing brackets nested deeper than ``MAX_DEPTH`` as it meets them."""
+
+    def fetch_flow_collection_start(self, TokenClass):
+        if self.flow_level >= MAX_DEPTH:
+            raise yaml.scanner.ScannerError(problem=f"lists or mappings nested deeper than {MAX_DEPTH}",
+                                            problem_mark=self.get_mark())
+        super().fetch_flow_collection_start(TokenClass)
+
+
+def read_text(path, kind: str) -> str:
+    """The text of the file ``path``, a ``kind`` (e.g. "YAML file"); errors name the file: a folder, missing, over
+    ``MAX_BYTES``, not UTF-8."""
+    path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder; expected a {kind}")
+    if not path.is_file():
+        raise FileNotFoundError(f"no file {path}: expected a {kind}")
+    if path.stat().st_size > MAX_BYTES:
+        raise ValueError(f"{path} is {path.stat().st_size} bytes; a {kind} here is at most {MAX_BYTES}")
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"{path} is not a text file (UTF-8); expected a {kind}") from None
+
+
+def read_yaml(path) -> Any:
+    """The YAML document of the file ``path`` (a config, a calibration, a sweep's spec); errors name the file (and the
+    line, for YAML errors). A document nested deeper than ``MAX_DEPTH``, or whose aliases would expand beyond
+    ``MAX_NODES`` nodes (a "billion laughs"), is refused before it is built."""
+    path = Path(path)
+    text = read_text(path, "YAML file")
+    loader = None
+    try:
+        loader = _Loader(text)  # checks the characters at once
+        node = loader.get_single_node()
+        if node is not None and _expanded_nodes(node, {}) > MAX_NODES:
+            raise ValueError(f"{path}: its aliases expand to more than {MAX_NODES} YAML nodes; refused")
+        return None if node is None else loader.construct_document(node)
+    except yaml.MarkedYAMLError as error:
+        mark = error.problem_mark or error.context_mark
+        where = f", line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ValueError(f"{path}{where}: not valid YAML: {error.problem or error.context}") from None
+    except yaml.YAMLError as error:
+        raise ValueError(f"{path}: not valid YAML: {error}") from None
+    except RecursionError:
+        raise ValueError(f"{path}: not valid YAML: nested too deeply") from None
+    except (ValueError, TypeError, OverflowError) as error:  # a tagged value that cannot be built: !!int x, ...
+        if str(path) in str(error):
+            raise
+        raise ValueError(f"{path}: not valid YAML: {error}") from None
+    finally:
+        if loader is not None:
+            loader.dispose()
+
+
+def _expanded_nodes(node: yaml.Node, counted: dict[int, int]) -> int:
+    """How many nodes ``node`` becomes with every alias expanded (each shared node counted once per use)."""
+    if id(node) in counted:
+        return counted[id(node)]
+    counted[id(node)] = 1  # a node that refers to itself counts once
+    if isinstance(node, yaml.SequenceNode):
+        total = 1 + sum(_expanded_nodes(child, counted) for child in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        total = 1 + sum(_expanded_nodes(k, counted) + _expanded_nodes(v, counted) for k, v in node.value)
+    else:
+        total = 1
+    counted[id(node)] = total
+    return total
+
+
+def _shown(value) -> str:
+    """``value`` as an error shows it: its repr, cut to 60 characters."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _field(entry, key: str, where: str):
+    """``entry[key]`` of a mapping; errors name ``where``."""
+    if not isinstance(entry, Mapping):
+        raise ValueError(f"{where}: expected a mapping with the field '{key}', got {_shown(entry)}")
     if key not in entry:
         raise ValueError(f"{where}: missing the field '{key}'")
     return entry[key]
 
 
+def _mapping(value, where: str) -> Mapping:
+    """``value``, a mapping; errors name ``where``."""
+    if not isinstance(value, Mapping):
+        raise ValueError(f"{where}: expected a mapping, got {_shown(value)}")
+    return value
+
+
+def _list(value, where: str, length: int | None = None) -> list:
+    """``value``, a list (of ``length`` items when given); errors name ``where``."""
+    if not isinstance(value, list | tuple) or (length is not None and len(value) != length):
+        items = "a list" if length is None else f"a list of {length}"
+        raise ValueError(f"{where}: expected {items}, got {_shown(value)}")
+    return list(value)
+
+
+def _number(value, where: str) -> float:
+    """``value`` as a float: a number, or text that reads as one (YAML 1.1 reads ``1e3`` as text); errors name
+    ``where``."""
+    if isinstance(value, bool) or not isinstance(value, int | float | str):
+        raise ValueError(f"{where}: expected a number, got {_shown(value)}")
+    try:
+        return float(value)
+    except (ValueError, OverflowError):
+        raise ValueError(f"{where}: expected a number, got {_shown(value)}") from None
+
+
+def _numbers(values, where: str) -> list[float]:
+    """``values``, a list of numbers (``_number``), as floats."""
+    return [_number(value, where) for value in _list(values, where)]
+
+
+def _named(error: ValueError, where: str) -> ValueError:
+    """``error`` with ``where`` in front, unless it names it already."""
+    return error if where in str(error) else ValueError(f"{where}: {error}")
+
+
 def load_kalibr(path) -> dict[str, Camera]:
     """Cameras of a Kalibr camchain YAML, by name (``cam0``, ...), in the file's order."""
     path = Path(path)
-    document = yaml.safe_load(path.read_text())
+    document = read_yaml(path)
     if not isinstance(document, Mapping) or not document:
         raise ValueError(f"{path}: not a Kalibr camchain (expected a mapping of cam0, cam1, ...)")
     return {name: camera_from_kalibr(entry, f"{path}, {name}") for name, entry in document.items()}
@@ -65,14 +193,17 @@ def camera_from_kalibr(entry: Mapping, where: str) -> Camera:
     """The camera of one Kalibr camchain entry (a mapping); ``where`` names it in error messages. The model is the one
     of ``MODELS`` whose ``KALIBR_MODEL``, ``KALIBR_DISTORTIONS`` and ``KALIBR_INTRINSICS`` the entry has."""
     model = _field(entry, "camera_model", where)
-    intrinsics = [float(v) for v in _field(entry, "intrinsics", where)]
-    width, height = _field(entry, "resolution", where)
+    intrinsics = _numbers(_field(entry, "intrinsics", where), f"{where}, intrinsics")
+    width, height = _list(_field(entry, "resolution", where), f"{where}, resolution", 2)
     distortion = entry.get("distortion_model", "none")
-    coeffs = [float(v) for v in entry.get("distortion_coeffs", []) or []]
+    coeffs = _numbers(entry.get("distortion_coeffs", []) or [], f"{where}, distortion_coeffs")
     for cls in MODELS.values():
         form = (cls.KALIBR_MODEL, cls.KALIBR_INTRINSICS)
         if form == (model, len(intrinsics)) and distortion in cls.KALIBR_DISTORTIONS:
-            return cls.from_kalibr(intrinsics, distortion, coeffs, width, height, where)
+            try:
+                return cls.from_kalibr(intrinsics, distortion, coeffs, width, height, where)
+            except ValueError as error:
+                raise _named(error, where) from None
     forms = ", ".join(
         f"'{cls.KALIBR_MODEL}' ({cls.KALIBR_INTRINSICS} intrinsics, distortion "
         f"{' or '.join(map(repr, cls.KALIBR_DISTORTIONS))})"
@@ -80,7 +211,7 @@ def camera_from_kalibr(entry: Mapping, where: str) -> Camera:
         if cls.KALIBR_MODEL is not None
     )
     raise ValueError(
-        f"{where}: unsupported camera model '{model}' with distortion '{distortion}' and "
+        f"{where}: unsupported camera model {_shown(model)} with distortion {_shown(distortion)} and "
         f"{len(intrinsics)} intrinsics; supported are {forms}"
     )
 
@@ -129,26 +260,32 @@ def load_basalt(path) -> list[Camera]:
     """Cameras of a Basalt calibration JSON, in the file's order."""
     path = Path(path)
     try:
-        document = json.loads(path.read_text())
+        document = json.loads(read_text(path, "Basalt calibration JSON"))
     except json.JSONDecodeError as error:
         raise ValueError(f"{path}: not valid JSON ({error})") from None
+    except RecursionError:
+        raise ValueError(f"{path}: not valid JSON (nested too deeply)") from None
     calibration = _field(document, "value0", str(path))
-    entries = _field(calibration, "intrinsics", f"{path}, value0")
-    sizes = _field(calibration, "resolution", f"{path}, value0")
+    entries = _list(_field(calibration, "intrinsics", f"{path}, value0"), f"{path}, value0, intrinsics")
+    sizes = _list(_field(calibration, "resolution", f"{path}, value0"), f"{path}, value0, resolution")
     if len(entries) != len(sizes):
         raise ValueError(f"{path}: {len(entries)} cameras in 'intrinsics' but {len(sizes)} in 'resolution'")
     cameras = []
-    for index, (entry, (width, height)) in enumerate(zip(entries, sizes, strict=True)):
+    basalt = _basalt_models()
+    for index, (entry, size) in enumerate(zip(entries, sizes, strict=True)):
         where = f"{path}, camera {index}"
+        width, height = _list(size, f"{where}, resolution", 2)
         model = _field(entry, "camera_type", where)
-        basalt = _basalt_models()
-        if model not in basalt:
+        if not isinstance(model, str) or model not in basalt:
             supported = ", ".join(map(repr, basalt))
-            raise ValueError(f"{where}: unsupported camera model '{model}'; supported are {supported}")
+            raise ValueError(f"{where}: unsupported camera model {_shown(model)}; supported are {supported}")
         cls = basalt[model]
         values = _field(entry, "intrinsics", where)
-        params = [float(_field(values, name, where)) for name in cls.PARAMETER_NAMES]
-        cameras.append(cls.from_params(params, width, height))
+        params = [_number(_field(values, name, where), f"{where}, {name}") for name in cls.PARAMETER_NAMES]
+        try:
+            cameras.append(cls.from_params(params, width, height))
+        except ValueError as error:
+            raise _named(error, where) from None
     return cameras
 
 
@@ -183,7 +320,10 @@ def camera_from_camera_info(model: str, d, k, width: int, height: int, where: st
     fx, fy, cx, cy = (float(k[i]) for i in (0, 4, 2, 5))
     d = [float(v) for v in d]
     for cls in MODELS.values():
-        camera = cls.from_camera_info(model, d, fx, fy, cx, cy, width, height)
+        try:
+            camera = cls.from_camera_info(model, d, fx, fy, cx, cy, width, height)
+        except ValueError as error:
+            raise _named(error, where) from None
         if camera is not None:
             return camera
     expected = ", ".join(cls.CAMERA_INFO for cls in MODELS.values() if cls.CAMERA_INFO)
@@ -200,19 +340,27 @@ def camera_info_distortion(camera: Camera) -> tuple[str, list[float]]:
 def load_boofcv(path) -> Omni:
     """The camera of a BoofCV calibration YAML of the unified model (``model: omnidirectional_universal``)."""
     path = Path(path)
-    document = yaml.safe_load(path.read_text())
+    document = read_yaml(path)
     if not isinstance(document, Mapping) or document.get("model") != "omnidirectional_universal":
         model = document.get("model") if isinstance(document, Mapping) else None
-        raise ValueError(f"{path}: expected a BoofCV 'omnidirectional_universal' calibration, got model {model!r}")
-    pinhole = _field(document, "pinhole", str(path))
-    if float(pinhole.get("skew", 0.0)) != 0.0:
-        raise ValueError(f"{path}: a skew of {pinhole['skew']}; the camera models have none")
-    distortion = _field(document, "radial_tangential", str(path))
-    radial = [float(k) for k in distortion.get("radial") or []]
+        raise ValueError(
+            f"{path}: expected a BoofCV 'omnidirectional_universal' calibration, got model {_shown(model)}"
+        )
+    pinhole = _mapping(_field(document, "pinhole", str(path)), f"{path}, pinhole")
+    skew = _number(pinhole.get("skew", 0.0), f"{path}, pinhole, skew")
+    if skew != 0.0:
+        raise ValueError(f"{path}: a skew of {skew}; the camera models have none")
+    distortion = _mapping(_field(document, "radial_tangential", str(path)), f"{path}, radial_tangential")
+    radial = _numbers(distortion.get("radial") or [], f"{path}, radial_tangential, radial")
     if len(radial) > 2:
         raise ValueError(f"{path}: {len(radial)} radial coefficients; the omni model holds two (k1, k2)")
     k1, k2 = (*radial, 0.0, 0.0)[:2]
-    values = [float(_field(pinhole, name, f"{path}, pinhole")) for name in ("fx", "fy", "cx", "cy")]
-    xi = float(_field(document, "mirror_offset", str(path)))
-    tangential = (float(distortion.get("t1", 0.0)), float(distortion.get("t2", 0.0)))
-    return Omni(*values, xi, (k1, k2, *tangential), pinhole["width"], pinhole["height"])
+    values = [_number(_field(pinhole, name, f"{path}, pinhole"), f"{path}, pinhole, {name}")
+              for name in ("fx", "fy", "cx", "cy")]
+    xi = _number(_field(document, "mirror_offset", str(path)), f"{path}, mirror_offset")
+    tangential = [_number(distortion.get(name, 0.0), f"{path}, radial_tangential, {name}") for name in ("t1", "t2")]
+    size = (_field(pinhole, "width", f"{path}, pinhole"), _field(pinhole, "height", f"{path}, pinhole"))
+    try:
+        return Omni(*values, xi, (k1, k2, *tangential), *size)
+    except ValueError as error:
+        raise _named(error, str(path)) from None

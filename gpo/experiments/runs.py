@@ -44,7 +44,7 @@ def board_image_path() -> Path:
     by the simulator's sources like the recordings)."""
     key = gpo.io.cache.key(sources=sources("gpo.sim.record"))
     path = gpo.io.cache.path("recordings", "floor_board_t265", key, ".png")
-    if not path.exists():
+    if not gpo.io.cache.intact(path):
         gpo.io.cache.write(path, lambda partial: cv2.imwrite(str(partial), floor_board_image("t265")))
     return path
 
@@ -62,7 +62,7 @@ def floor_run(bag, config: OdometryConfig, cache: bool = True) -> FloorRun:
     """The ``FloorRun`` of ``gpo.pipeline.run`` of ``bag`` with ``config`` (a floor method), read from the disk cache
     when kept."""
     path = _run_path(Path(bag), config)
-    if cache and path.exists():
+    if cache and gpo.io.cache.intact(path):
         with np.load(path) as kept:
             poses = kept["poses"]
             trajectory = Trajectory.from_planar(kept["stamps_ns"], *poses.T, frame_id="odom")

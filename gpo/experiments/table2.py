@@ -132,7 +132,7 @@ def experiment_runs(chosen: Experiment, configs: dict[str, OdometryConfig], cach
     own matching, filters and fit."""
     bag = recording(chosen.preset, progress=False)
     paths = {name: _run_path(bag, chosen, config) for name, config in configs.items()}
-    runs = {name: _load(path) for name, path in paths.items() if cache and path.exists()}
+    runs = {name: _load(path) for name, path in paths.items() if cache and gpo.io.cache.intact(path)}
     runs = {name: run for name, run in runs.items() if run is not None}
     missing = {name: config for name, config in configs.items() if name not in runs}
     groups: dict[tuple, dict[str, OdometryConfig]] = {}

@@ -219,7 +219,7 @@ def cached_table(description: dict, floor: FloorImage, camera, build: Callable, 
     ``build()`` -> (fisheye uv, valid) and, with ``keep``, kept there."""
     key = table_key({**description, "floor": floor.description(), "camera": _camera_description(camera)})
     path = gpo.io.cache.path("tables", "table", key, ".npz")
-    if keep and path.exists():
+    if keep and gpo.io.cache.intact(path):
         with np.load(path) as stored:
             return RemapTable(
                 stored["map_x"], stored["map_y"], stored["valid"], floor, (camera.width, camera.height), key

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import difflib
 import logging
+import sqlite3
 import struct
 import warnings
 from collections.abc import Iterator
@@ -73,7 +74,13 @@ _TO_GRAY = {
 }
 _FROM_BGR = {("bgr8", "rgb8"): cv2.COLOR_BGR2RGB, ("bgra8", "rgba8"): cv2.COLOR_BGRA2RGBA}
 
-_ROSBAGS_ERRORS = (AnyReaderError, rosbag1.ReaderError, rosbag2.ReaderError)
+_DAMAGED = (
+    AnyReaderError, rosbag1.ReaderError, rosbag2.ReaderError, ValueError, KeyError, IndexError, TypeError,
+    AttributeError, AssertionError, OverflowError, EOFError, MemoryError, struct.error, sqlite3.Error,
+)
+"""What rosbags raises reading the bytes of a damaged bag (cut short, bits flipped, records out of order, a topic
+declaring another type than its messages hold; found by tests/fuzzing), each turned into a ValueError naming the bag.
+A MemoryError comes of a length field read as gigabytes."""
 
 
 class StampWarning(UserWarning):
@@ -119,12 +126,29 @@ class Recording:
         try:
             self.reader = AnyReader([source], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
             self.reader.open()
-        except (*_ROSBAGS_ERRORS, ValueError, KeyError, IndexError, struct.error) as error:
+        except _DAMAGED as error:
             hint = _repair_hint(self.path)
             raise ValueError(f"{self.path} is not a readable {self.format} recording ({error}).{hint}") from error
+        self._check_index()
         if self.reader.message_count == 0:
             self.close()
             raise ValueError(f"{self.path} holds no messages: expected a recording with at least one")
+
+    def _check_index(self) -> None:
+        """Each topic named by text, of a type named by text, counted by a whole number, and the first and last
+        times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say otherwise."""
+        problem = None
+        for connection in self.reader.connections:
+            fields = (connection.topic, connection.msgtype, connection.msgcount)
+            if not (isinstance(fields[0], str) and isinstance(fields[1], str) and isinstance(fields[2], int)):
+                problem = (f"a topic {fields[0]!r:.60} of type {fields[1]!r:.60} with {fields[2]!r:.20} messages; "
+                           "expected names and a count")
+        times = (self.reader.start_time, self.reader.end_time)
+        if not all(isinstance(time, int) and -(2**63) <= time < 2**63 for time in times):
+            problem = f"its first and last times are {times[0]!r:.30} and {times[1]!r:.30}; expected nanoseconds"
+        if problem:
+            self.close()
+            raise ValueError(f"{self.path} is damaged: {problem}.{_repair_hint(self.path)}")
 
     def close(self) -> None:
         """Close the recording's files."""
@@ -330,11 +354,16 @@ class Recording:
         return "its topics: " + ", ".join(f"{t.name} ({t.msgtype})" for t in self.topics())
 
     def raw_messages(self, connections=()) -> Iterator[tuple[object, int, bytes]]:
-        """(connection, log time ns, serialised message) in bag order; all topics when ``connections`` is empty."""
+        """(connection, log time ns, serialised message) in bag order; all topics when ``connections`` is empty. A
+        message of another connection than those asked for (a damaged index) raises ValueError, as any damage does."""
+        wanted = {id(connection) for connection in connections}
         try:
-            yield from self.reader.messages(connections)
-        except _ROSBAGS_ERRORS as error:
-            raise ValueError(f"{self.path} is damaged: {error}") from error
+            for connection, log_ns, raw in self.reader.messages(connections):
+                if wanted and id(connection) not in wanted:
+                    raise ValueError(f"a message of {connection.topic} among those of another topic")
+                yield connection, log_ns, raw
+        except _DAMAGED as error:
+            raise ValueError(f"{self.path} is damaged: {type(error).__name__}: {error}") from error
 
     def _messages(self, connections) -> Iterator[object]:
         """The deserialised messages of ``connections`` in bag order."""
@@ -345,7 +374,7 @@ class Recording:
         """One message; ValueError naming the bag and topic when its bytes cannot be read."""
         try:
             return self.reader.deserialize(raw, connection.msgtype)
-        except (AnyReaderError, ValueError, IndexError, TypeError) as error:
+        except _DAMAGED as error:
             raise ValueError(f"{self.path}: a {connection.msgtype} on {connection.topic} is damaged") from error
 
     def _transforms(self, parent: str, child: str, topic: str) -> tuple[list, str]:

@@ -8,8 +8,12 @@ folder of copies).
 
 A file's name ends in its ``key``: the first 16 hex digits of the sha256 of everything it is made from, written as
 canonical JSON, and of the source files that make it, so that a changed input or a changed program makes a new
-file instead of reading a stale one. ``write`` makes a file under a name of its own (the process id) and renames it
-into place, so processes sharing the folder never read one another's half-written files.
+file instead of reading a stale one. ``write`` makes a file under a name of its own (the process id), seals it (the
+size and CRC-32 of each of its files beside it, ``NAME.crc32``: ``gpo.io.checksum``) and renames it into place, so
+processes sharing the folder never read one another's half-written files. A reader asks ``intact`` before it reads:
+a file cut short or corrupted after it was made (a crash mid-write on another machine sharing the folder, a full disk,
+a bad sector), or made without a seal, is made again, never read as data. The check reads a file through once per
+process, then trusts it while its size and modification time stay.
 
 A changed program leaves the files of the old one behind (a full set of recordings is about 6 GB), so the cache is
 kept within ``MAX_BYTES``: after each ``write``, the oldest files of the kinds that can be made again
@@ -28,6 +32,8 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import pooch
+
+from gpo.io import checksum
 
 ENVIRONMENT_VARIABLE = "GPO_CACHE_DIR"
 KINDS = ("tables", "recordings", "runs", "datasets")
@@ -76,35 +82,50 @@ def path(kind: str, name: str, file_key: str, suffix: str = "") -> Path:
     return folder(kind) / f"{name}-{file_key}{suffix}"
 
 
+def intact(target: Path) -> bool:
+    """Whether the cached file (or folder) ``target`` is there and matches the seal ``write`` put beside it. One that
+    is not (cut short or corrupted since, or made without a seal) is to be made again with ``write``, never read."""
+    return checksum.intact(target)
+
+
 def write(target: Path, save: Callable[[Path], object]) -> Path:
     """Make ``target`` with ``save(partial)``, which writes a file (or a folder) at the path it is given: a name of
-    this process's own beside ``target``, renamed to ``target`` once complete. When another process got there
-    first, its file stays and this one's is removed (cached files of one name are identical). Returns ``target``."""
+    this process's own beside ``target``, sealed and renamed to ``target`` once complete. When another process got
+    there first and its file is intact, its file stays and this one's is removed (cached files of one name are
+    identical); a file there that is not intact is replaced. Returns ``target``."""
     target.parent.mkdir(parents=True, exist_ok=True)
     partial = target.with_name(f"{target.stem}-partial-{os.getpid()}{target.suffix}")
     _remove(partial)
     try:
         save(partial)
+        if intact(target):
+            _remove(partial)
+        else:
+            checksum.seal(target, of=partial)  # the seal first: a file in place is always sealed
+            if partial.is_dir():
+                _remove(target)  # a folder is not renamed over another
+            try:
+                partial.replace(target)
+            except OSError:  # a folder: unless another process's landed there meanwhile, intact
+                if not intact(target):
+                    raise
+                _remove(partial)
     except BaseException:
         _remove(partial)
         raise
-    if target.exists():
-        _remove(partial)
-    else:
-        partial.rename(target)
     evict(keep=target)
     return target
 
 
 def evict(keep: Path | None = None, max_bytes: int | None = None) -> list[Path]:
-    """Delete the oldest (by modification time) files and folders of ``EVICTED_KINDS`` until the cache holds at
-    most ``max_bytes`` (default ``MAX_BYTES``) in them; never ``keep``, nor another process's partial file. Returns
-    what was deleted, oldest first."""
+    """Delete the oldest (by modification time) files and folders of ``EVICTED_KINDS``, each with its seal, until the
+    cache holds at most ``max_bytes`` (default ``MAX_BYTES``) in them; never ``keep``, nor another process's partial
+    file. Returns what was deleted, oldest first."""
     limit = MAX_BYTES if max_bytes is None else max_bytes
     entries = []
     for kind in EVICTED_KINDS:
         for entry in folder(kind).glob("*") if folder(kind).is_dir() else ():
-            if "-partial-" in entry.name or entry == keep:
+            if "-partial-" in entry.name or entry.name.endswith(checksum.SUFFIX) or entry == keep:
                 continue
             try:
                 entries.append((entry.stat().st_mtime, _size(entry), entry))
@@ -117,6 +138,7 @@ def evict(keep: Path | None = None, max_bytes: int | None = None) -> list[Path]:
             break
         with contextlib.suppress(OSError):  # another process removed it first
             _remove(entry)
+            _remove(checksum.seal_path(entry))
         total -= size
         deleted.append(entry)
     return deleted

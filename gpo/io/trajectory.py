@@ -10,6 +10,7 @@ are comments. Stamps are written with all nine decimals, so a round trip keeps e
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -151,7 +152,13 @@ class Trajectory:
                     f"{path}:{number}: a TUM line has 8 numbers (t tx ty tz qx qy qz qw), got {len(fields)}"
                 )
             try:
-                stamp, pose = _seconds_text_to_ns(fields[0]), [float(v) for v in fields[1:]]
+                stamp = _seconds_text_to_ns(fields[0])
+            except ValueError:
+                raise ValueError(
+                    f"{path}:{number}: the stamp {fields[0]!r} is not a time in seconds within 292 years of 1970"
+                ) from None
+            try:
+                pose = [float(v) for v in fields[1:]]
             except ValueError:
                 raise ValueError(f"{path}:{number}: not a number in {line!r}") from None
             problem = _pose_problem(pose, stamp, stamps[-1] if stamps else None)
@@ -183,15 +190,23 @@ def _what_it_is(path: Path) -> str:
 
 
 def _seconds_text_to_ns(text: str) -> int:
-    """Exact integer nanoseconds of a decimal number of seconds such as ``1403715273.262142976``."""
+    """Exact integer nanoseconds of a decimal number of seconds such as ``1403715273.262142976``; ValueError for text
+    that is no number, or a time int64 nanoseconds cannot hold (more than 292 years from 1970)."""
     if "e" in text.lower():
-        return round(float(text) * NS_PER_S)
-    whole, _, fraction = text.partition(".")
-    sign = -1 if whole.startswith("-") else 1
-    fraction = (fraction + "000000000")[:9]
-    if not (whole.lstrip("+-").isdigit() or whole.lstrip("+-") == "") or not fraction.isdigit():
+        seconds = float(text)
+        if not math.isfinite(seconds):
+            raise ValueError(text)
+        stamp = round(seconds * NS_PER_S)
+    else:
+        whole, _, fraction = text.partition(".")
+        sign = -1 if whole.startswith("-") else 1
+        fraction = (fraction + "000000000")[:9]
+        if not (whole.lstrip("+-").isdigit() or whole.lstrip("+-") == "") or not fraction.isdigit():
+            raise ValueError(text)
+        stamp = int(whole or "0") * NS_PER_S + sign * int(fraction)
+    if not -(2**63) <= stamp < 2**63:
         raise ValueError(text)
-    return int(whole or "0") * NS_PER_S + sign * int(fraction)
+    return stamp
 
 
 def base_from_sensor_odometry(

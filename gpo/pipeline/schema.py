@@ -29,8 +29,9 @@ with its unit (``gpo.motion.ranges``: one rule, one way of saying it). The ``klt
 sections are the fields of ``KLTParameters``, ``FusionSettings`` and ``FeatureParameters`` themselves, which check
 their own ranges, so a field added there is a key of the file at once; a key of the other sections is one line of its
 section below, its range in its type (``ranged``).
-Errors name the file, the key and what is allowed; YAML errors name the line. A document whose aliases would
-expand beyond ``MAX_NODES`` nodes (a "billion laughs") is refused before it is built.
+Errors name the file, the key and what is allowed; YAML errors name the line. The file is read by
+``gpo.cameras.files.read_yaml``, which refuses a document whose aliases would expand beyond its limit (a "billion
+laughs") before it is built.
 """
 
 from __future__ import annotations
@@ -47,18 +48,13 @@ import yaml
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from scipy.spatial.transform import Rotation
 
-from gpo.cameras.files import Camera, camera_from_kalibr, camera_to_kalibr, load_basalt, load_kalibr
+from gpo.cameras.files import Camera, camera_from_kalibr, camera_to_kalibr, load_basalt, load_kalibr, read_yaml
 from gpo.cameras.rig import CameraMount, Rig
 from gpo.fusion import FusionSettings
 from gpo.io.outputs import write_text
 from gpo.motion.keypoints import FeatureParameters
 from gpo.motion.klt import KLTParameters
 from gpo.motion.ranges import MAX_IMAGE_PX, REACH_M, OutOfRange, check_value
-
-MAX_BYTES = 1_000_000
-"""The largest config file read, bytes."""
-MAX_NODES = 100_000
-"""The most YAML nodes a config may hold once its aliases are expanded."""
 
 
 def ranged(low, high, unit: str = "", whole: bool = False, low_open: bool = False):
@@ -192,50 +188,6 @@ class ConfigFile(Section):
         if (self.camera is None) == (self.camchain is None):
             raise ValueError("give either 'camera' (a Kalibr camchain entry) or 'camchain' (a camchain file), one")
         return self
-
-
-def read_yaml(path) -> Any:
-    """The YAML document of the file ``path``; errors name the file (and the line, for YAML errors)."""
-    path = Path(path)
-    if path.is_dir():
-        raise ValueError(f"{path} is a folder; expected a YAML file")
-    if not path.is_file():
-        raise FileNotFoundError(f"no file {path}: expected a YAML file")
-    if path.stat().st_size > MAX_BYTES:
-        raise ValueError(f"{path} is {path.stat().st_size} bytes; a config is at most {MAX_BYTES}")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise ValueError(f"{path} is not a text file (UTF-8); expected YAML") from None
-    loader = yaml.SafeLoader(text)
-    try:
-        node = loader.get_single_node()
-        if node is not None and _expanded_nodes(node, {}) > MAX_NODES:
-            raise ValueError(f"{path}: its aliases expand to more than {MAX_NODES} YAML nodes; refused")
-        return None if node is None else loader.construct_document(node)
-    except yaml.MarkedYAMLError as error:
-        mark = error.problem_mark or error.context_mark
-        where = f", line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise ValueError(f"{path}{where}: not valid YAML: {error.problem or error.context}") from None
-    except yaml.YAMLError as error:
-        raise ValueError(f"{path}: not valid YAML: {error}") from None
-    finally:
-        loader.dispose()
-
-
-def _expanded_nodes(node: yaml.Node, counted: dict[int, int]) -> int:
-    """How many nodes ``node`` becomes with every alias expanded (each shared node counted once per use)."""
-    if id(node) in counted:
-        return counted[id(node)]
-    counted[id(node)] = 1  # a node that refers to itself counts once
-    if isinstance(node, yaml.SequenceNode):
-        total = 1 + sum(_expanded_nodes(child, counted) for child in node.value)
-    elif isinstance(node, yaml.MappingNode):
-        total = 1 + sum(_expanded_nodes(k, counted) + _expanded_nodes(v, counted) for k, v in node.value)
-    else:
-        total = 1
-    counted[id(node)] = total
-    return total
 
 
 def read_config(path) -> ConfigFile:

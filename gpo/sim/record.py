@@ -409,10 +409,11 @@ def recording(
     (``gpo.io.fingerprint.sources`` of this module and of the module of the setup's ``static_tree``: the simulator
     and what it runs). Each process renders into a file of its own and renames it into place when complete,
     so processes that want the same recording at once never read one another's half-written bag (the files are
-    identical). ``jobs``: processes rendering its frames.
+    identical). A kept bag is checked against its seal (``gpo.io.cache.intact``) before its path is returned: one
+    cut short or corrupted since it was made is rendered again. ``jobs``: processes rendering its frames.
     """
     path = recording_path(what, format, seed, label)
-    if not path.exists():
+    if not cache.intact(path):  # missing, or cut short or corrupted since it was made
         cache.write(path, lambda partial: simulate(what, partial, format, progress, seed, jobs))
     return path
 
