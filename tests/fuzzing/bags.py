@@ -308,8 +308,6 @@ def check_bag(result: dict[str, object], mutant: Mutant) -> None:
     assert result["camera"] == T265_LIKE
 
 
-BAG_TARGETS = [
-    Target(fmt, bag_mutants(fmt), read_bag, check_bag, names_file=False) for fmt in FORMATS
-]
-"""The recording reader on each format. A refusal names the bag, except where the poses it reads are not finite
-(the trajectory's own check), so that ``names_file`` is left to the campaign's count."""
+BAG_TARGETS = [Target(fmt, bag_mutants(fmt), read_bag, check_bag) for fmt in FORMATS]
+"""The recording reader on each format: every refusal names the bag (poses that are not finite with the bag and the
+topic, ``gpo.io.bag``)."""
