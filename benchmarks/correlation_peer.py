@@ -21,7 +21,6 @@ import math
 import cv2
 import numpy as np
 
-from gpo.floor_image.image import FloorImage
 from gpo.io.bag import Recording
 from gpo.io.trajectory import Trajectory
 from gpo.metrics import final_error
@@ -35,12 +34,7 @@ WIDEN = 2.0  # the peer's top view covers this many times the config's floor reg
 
 def peer_config(config: OdometryConfig) -> OdometryConfig:
     """``config`` with its floor image's region widened ``WIDEN`` times about its centre, on as many pixels."""
-    floor = config.floor
-    centre_px = np.array([(floor.width - 1) / 2, (floor.height - 1) / 2])
-    linear = floor.affine[:, :2]
-    offset = floor.affine[:, 2] + (1.0 - WIDEN) * linear @ centre_px  # the centre pixel sees the same floor point
-    widened = FloorImage(floor.width, floor.height, np.column_stack([WIDEN * linear, offset]), floor.metric)
-    return config.replace(floor=widened)
+    return config.replace(floor=config.floor.widened(WIDEN))
 
 
 def correlation_odometry(bag, config: OdometryConfig) -> Trajectory:
