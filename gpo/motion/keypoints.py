@@ -14,7 +14,13 @@ the caller turns the kept pixels into floor points, fits the transform (``gpo.od
   not the floor. The disc's radius is ``SUPPORT_PER_SIZE`` times the keypoint's diameter (``cv2.KeyPoint.size``):
   half of it for ORB, whose 31 x 31 patch at the keypoint's pyramid level is ``size`` wide; three times it for
   SIFT, half the side of its 4 x 4 grid of histograms, each three keypoint scales (``size / 2``) wide (the grid's
-  turned corners reach further, where its Gaussian weight has fallen below 0.6).
+  turned corners reach further, where its Gaussian weight has fallen below 0.6). A keypoint's point is the pixel
+  centre of what it marks: by default OpenCV's SIFT reports its keypoints a quarter of its input's pixel right of
+  and below it (so SIFT is made with the precise upscale), and its ORB a keypoint of a coarser pyramid level up
+  and left of it (``_orb_points`` follows it back). The same offset in every frame would cancel on an ideal lens,
+  but a lens with radial distortion maps one pixel offset to floor offsets that differ across the image, and
+  driving straight then reads as a slow turn: a 0.5 px offset turns the path 0.08 degrees a metre under a 520 px
+  lens with k1 = -0.35, k2 = 0.15 seen 0.25 m above the floor.
 - **Matching** (``match``): the two nearest descriptors of each previous keypoint among the current ones
   (``cv2.BFMatcher``: Hamming distance for ORB, Euclidean for SIFT); a match is kept when the nearest is clearly
   nearer than the second (Lowe's ratio test) and, optionally, when it is mutual (the cross check).
@@ -65,6 +71,9 @@ SHORT_SIDE_PX = 2.0  # a loop side shorter than this in both frames is too short
 
 
 MIN_ROI_PX = 32  # the smallest region of interest, width and height
+
+
+ORB_SCALE_FACTOR, ORB_LEVELS = 1.2, 8  # ORB's pyramid: each level this much smaller than the one before, and how many
 
 
 class FeatureError(ValueError):
@@ -190,6 +199,8 @@ def detect(image: np.ndarray, parameters: FeatureParameters, mask=None) -> Keypo
     if not found:
         return _no_keypoints(parameters.detector)
     points = np.array([keypoint.pt for keypoint in found], dtype=float)
+    if parameters.detector == "orb":
+        points = _orb_points(points, np.array([keypoint.octave for keypoint in found]), image.shape)
     sizes = np.array([keypoint.size for keypoint in found], dtype=float)
     inside = _support_clear(points, SUPPORT_PER_SIZE[parameters.detector] * sizes, usable)
     full = (points[inside] + 0.5) / scale - 0.5 + [u0, v0]  # pixel centres of the full image
@@ -226,8 +237,37 @@ def _region(image, usable, roi) -> tuple[tuple[int, int], np.ndarray, np.ndarray
 
 def _detector(parameters: FeatureParameters):
     if parameters.detector == "orb":
-        return cv2.ORB_create(nfeatures=parameters.max_features, fastThreshold=parameters.fast_threshold)
-    return cv2.SIFT_create(nfeatures=parameters.max_features, contrastThreshold=parameters.contrast_threshold)
+        return cv2.ORB_create(
+            nfeatures=parameters.max_features,
+            scaleFactor=ORB_SCALE_FACTOR,
+            nlevels=ORB_LEVELS,
+            fastThreshold=parameters.fast_threshold,
+        )
+    # OpenCV's SIFT first doubles the image; by default its keypoints then lie a quarter of a pixel right of and
+    # below the blobs they mark (opencv/opencv#23123); the precise upscale maps pixel x to 2x and puts them on them
+    return cv2.SIFT_create(
+        nfeatures=parameters.max_features,
+        contrastThreshold=parameters.contrast_threshold,
+        enable_precise_upscale=True,
+    )
+
+
+def _orb_points(reported: np.ndarray, levels: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """ORB's keypoints (N, 2) as pixel centres of the image (H, W) it searched.
+
+    OpenCV's ORB finds a keypoint at a pixel of its pyramid level L, an image of round(W / s_L) x round(H / s_L)
+    pixels (s_L = ``ORB_SCALE_FACTOR`` ** L, in float32) resized from level L - 1, and reports that pixel times
+    s_L. A resize maps pixel centres, x_(L-1) = (x_L + 1/2) W_(L-1) / W_L - 1/2, so the reported point lies
+    (s_L - 1) / 2 pixels, more or less with the rounding, up and left of the corner: more than a pixel on the
+    coarsest levels. Here each level's point is followed down the pyramid as the resizes map it."""
+    height, width = shape
+    scales = np.float32(ORB_SCALE_FACTOR) ** np.arange(ORB_LEVELS, dtype=np.float32)
+    sizes = np.rint(np.array([width, height], np.float32) / scales[:, None]).astype(float)  # as OpenCV's cvRound
+    points = reported / scales[levels].astype(float)[:, None]  # pixels of the keypoint's level
+    for level in range(int(levels.max(initial=0)), 0, -1):
+        deeper = levels >= level
+        points[deeper] = (points[deeper] + 0.5) * (sizes[level - 1] / sizes[level]) - 0.5
+    return points
 
 
 def _no_keypoints(detector: str) -> Keypoints:

@@ -54,8 +54,8 @@ DOWNWARD = {
     "tilt_deg": (-3.0, 3.0),  # about base_link's x and y, each
     "x_m": (-0.2, 0.2),
     "y_m": (-0.1, 0.1),
-    "k1": (-0.25, 0.0),
-    "k2": (0.0, 0.1),
+    "k1": (-0.40, 0.0),  # barrel distortion, up to a wide-angle lens's (a constant keypoint offset turns the path)
+    "k2": (0.0, 0.2),  # from 0.6 k1^2 on, which keeps the lens's radial map growing (``_downward``)
     "p_px": (-5e-4, 5e-4),  # p1, p2
     "centre_px": (-8.0, 8.0),
 }
@@ -186,7 +186,11 @@ def _downward(rng: np.random.Generator) -> tuple[Rig, dict]:
     height = rng.uniform(max(DOWNWARD["height_m"][0], MIN_FOOTPRINT_M * focal), DOWNWARD["height_m"][1])
     tilt_x, tilt_y = rng.uniform(*DOWNWARD["tilt_deg"], size=2)
     x, y = rng.uniform(*DOWNWARD["x_m"]), rng.uniform(*DOWNWARD["y_m"])
-    k1, k2 = rng.uniform(*DOWNWARD["k1"]), rng.uniform(*DOWNWARD["k2"])
+    # the radial map r (1 + k1 r^2 + k2 r^4) keeps growing, so that every pixel sees one ray: its slope
+    # 1 + 3 k1 r^2 + 5 k2 r^4 is least, 1 - 9 k1^2 / (20 k2), at r^2 = -3 k1 / (10 k2), and k2 >= 0.6 k1^2 keeps
+    # that at least a quarter of the slope at the centre
+    k1 = rng.uniform(*DOWNWARD["k1"])
+    k2 = rng.uniform(max(DOWNWARD["k2"][0], 0.6 * k1**2), DOWNWARD["k2"][1])
     p1, p2 = rng.uniform(*DOWNWARD["p_px"], size=2)
     shift_x, shift_y = rng.uniform(*DOWNWARD["centre_px"], size=2)
     shipped = downward_rig()
@@ -201,7 +205,10 @@ def _downward(rng: np.random.Generator) -> tuple[Rig, dict]:
     )
     mount = CameraMount.downward(x, y, height, math.radians(tilt_x), math.radians(tilt_y))
     rig = Rig("downward", camera, mount, shipped.rate_hz, shipped.image_topic, shipped.info_topic, shipped.frame_id)
-    parameters = {"height_m": height, "f_px": focal, "tilt_x_deg": tilt_x, "tilt_y_deg": tilt_y, "x_m": x, "y_m": y}
+    parameters = {
+        "height_m": height, "f_px": focal, "tilt_x_deg": tilt_x, "tilt_y_deg": tilt_y, "x_m": x, "y_m": y,
+        "k1": k1, "k2": k2,
+    }
     return rig, {name: round(float(value), 4) for name, value in parameters.items()}
 
 
