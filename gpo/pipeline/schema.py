@@ -22,11 +22,11 @@
       image: /camera/fisheye1/image_raw
       camera_info: /camera/fisheye1/camera_info
 
-and the run's sections: ``floor_image``, ``klt``, ``kinematics``, ``odometry``, ``fusion``, ``features``
-(``gpo.pipeline.config.load_config``). Every section and key is checked before anything runs: types, ranges, finite
-numbers, and unknown keys at every level (with the nearest known one). The ``klt``, ``fusion`` and ``features``
-sections are the fields of ``KLTParameters``, ``FusionSettings`` and ``FeatureParameters`` themselves, so a field
-added there is a key of the file at once; a key of the other sections is one line of its section below.
+and the run's sections: ``floor_image``, ``klt``, ``keyframe``, ``kinematics``, ``odometry``, ``fusion``,
+``features`` (``gpo.pipeline.config.load_config``). Every section and key is checked before anything runs: types,
+ranges, finite numbers, and unknown keys at every level (with the nearest known one). The ``klt``, ``keyframe``,
+``fusion`` and ``features`` sections are the fields of ``KLTParameters``, ``KeyframePolicy``, ``FusionSettings`` and
+``FeatureParameters`` themselves, so a field added there is a key of the file at once; a key of the other sections is one line of its section below.
 Errors name the file, the key and what is allowed; YAML errors name the line. A document whose aliases would
 expand beyond ``MAX_NODES`` nodes (a "billion laughs") is refused before it is built.
 """
@@ -49,6 +49,7 @@ from gpo.cameras.files import Camera, camera_from_kalibr, camera_to_kalibr, load
 from gpo.cameras.rig import CameraMount, Rig
 from gpo.fusion import FusionSettings
 from gpo.io.outputs import write_text
+from gpo.motion.keyframes import KeyframePolicy
 from gpo.motion.keypoints import FeatureParameters
 from gpo.motion.klt import KLTParameters
 
@@ -167,6 +168,7 @@ class ConfigFile(Section):
     topics: TopicsSection
     floor_image: FloorImageSection = FloorImageSection()
     klt: KLTParameters = KLTParameters()
+    keyframe: KeyframePolicy = KeyframePolicy()
     kinematics: KinematicsSection | None = None
     odometry: OdometrySection = OdometrySection()
     fusion: FusionSettings = FusionSettings()

@@ -18,6 +18,7 @@ class ExactArc(FloorEstimator):
     """The exact arc that moves the measured floor point by the vector of the floor's own tracks."""
 
     NAME = "gpo-exact"
+    KEYFRAMES = True
 
     def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
         floor = floor_layer(measurement.start, measurement.end, self.geometry.nadir_px)

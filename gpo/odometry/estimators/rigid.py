@@ -16,6 +16,7 @@ class RigidFit(FloorEstimator):
     """The rigid motion of the kept tracks, fitted on those RANSAC finds agreeing."""
 
     NAME = "gpo-rigid"
+    KEYFRAMES = True
 
     def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
         start, end = self.geometry.metres(measurement.start), self.geometry.metres(measurement.end)
