@@ -44,7 +44,8 @@ def _floor_image(floor: np.ndarray, pose: np.ndarray, rng: np.random.Generator) 
     pixel (u, v) lies at x = AHEAD_M + (100 - v) mm, y = (100 - u) mm in base_link."""
     rows, columns = PATCH_PX // CAMERA_PIXEL_PX[0], PATCH_PX // CAMERA_PIXEL_PX[1]
     v, u = np.meshgrid(
-        (np.arange(rows) + 0.5) * PATCH_PX / rows - 0.5, (np.arange(columns) + 0.5) * PATCH_PX / columns - 0.5,
+        (np.arange(rows) + 0.5) * PATCH_PX / rows - 0.5,
+        (np.arange(columns) + 0.5) * PATCH_PX / columns - 0.5,
         indexing="ij",
     )
     x, y = AHEAD_M + (PATCH_PX / 2 - v) * PIXEL_M, (PATCH_PX / 2 - u) * PIXEL_M
@@ -68,8 +69,9 @@ def _heading_error_deg(policy: KeyframePolicy, images, truth) -> float:
         measurement = flow.track(image, k / RATE_HZ)
         if measurement is not None:
             assert measurement.quality.ok, measurement.quality.flag
-            pose = compose(keyframe_pose, increment_from_point_pairs(*map(_in_base_link, (measurement.start,
-                                                                                         measurement.end))))
+            pose = compose(
+                keyframe_pose, increment_from_point_pairs(*map(_in_base_link, (measurement.start, measurement.end)))
+            )
         if flow.keyframe_is_latest:
             keyframe_pose = pose
     return float(np.degrees(pose[2] - truth[-1, 2]))
@@ -134,6 +136,8 @@ def test_the_keyframe_key_round_trips_and_is_checked(tmp_path):
 def test_the_papers_gpo_measures_frame_to_frame_whatever_the_policy():
     bag = recording("test", progress=False)
     config = load_config().replace(method="gpo")
-    records = [run(bag, config.replace(keyframe=policy), progress=False).records
-               for policy in (FRAME_TO_FRAME, KeyframePolicy(0.3, 100))]
+    records = [
+        run(bag, config.replace(keyframe=policy), progress=False).records
+        for policy in (FRAME_TO_FRAME, KeyframePolicy(0.3, 100))
+    ]
     assert records[0] == records[1]

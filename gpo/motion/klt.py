@@ -314,10 +314,11 @@ class FloorFlow:
         window = (p.window_px, p.window_px)
         start = points.reshape(-1, 1, 2)
         shift = np.broadcast_to(shift, points.shape).reshape(-1, 1, 2)
-        turn = _Turn.between(points, (start + shift).reshape(-1, 2), image.shape) if self.keyframe.max_frames > 1 else None
+        guess = (start + shift).reshape(-1, 2)  # where each search starts
+        turn = None if self.keyframe.max_frames == 1 else _Turn.between(points, guess, image.shape)
         if turn is not None:  # the frame turned back onto the keyframe, the searches' starts with it
             image = turn.view(image)
-            shift = turn.to_view((start + shift).reshape(-1, 2)).reshape(-1, 1, 2) - start
+            shift = turn.to_view(guess).reshape(-1, 1, 2) - start
         lk = {"winSize": window, "maxLevel": p.pyramid_levels, "criteria": criteria}
         lk["flags"] = cv2.OPTFLOW_USE_INITIAL_FLOW
         end, status, _ = cv2.calcOpticalFlowPyrLK(reference, image, start, start + shift, **lk)

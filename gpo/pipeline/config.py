@@ -58,8 +58,8 @@ def methods() -> tuple[str, ...]:
 class OdometryConfig:
     """Everything a run needs: the ``rig``, the ``floor`` image, the KLT ``klt`` parameters, the ``keyframe`` policy
     of the estimators that measure from keyframes (``gpo.motion.keyframes``; the paper's ``gpo`` measures frame to
-    frame whatever it says), the paper's bicycle ``model``, the ``method`` (one of ``methods()``: a floor estimator of ``gpo.odometry.estimators`` or ``fused``), the
-    ``vector`` statistic (median or mean; for ``gpo`` and
+    frame whatever it says), the paper's bicycle ``model``, the ``method`` (one of ``methods()``: a floor estimator of
+    ``gpo.odometry.estimators`` or ``fused``), the ``vector`` statistic (median or mean; for ``gpo`` and
     ``gpo-exact``), ``max_gap_s``, the longest time the robot coasts or a frame gap is bridged, seconds, the
     ``fusion`` settings of the ``fused`` method, and the ``route`` that makes the floor image (``floor_table``):
 
@@ -128,8 +128,8 @@ class OdometryConfig:
 
 def load_config(path=None) -> OdometryConfig:
     """The run config of a config YAML (checked by ``gpo.pipeline.schema.read_config``) with the sections
-    ``floor_image``, ``klt``, ``keyframe``, ``kinematics``, ``odometry``, ``fusion`` and ``features``; None loads the shipped default for the
-    simulated T265 rig. Errors name the file and the key."""
+    ``floor_image``, ``klt``, ``keyframe``, ``kinematics``, ``odometry``, ``fusion`` and ``features``; None loads the
+    shipped default for the simulated T265 rig. Errors name the file and the key."""
     if path is None:
         with resources.as_file(resources.files("gpo") / "configs" / DEFAULT_CONFIG) as default:
             return load_config(default)

@@ -26,9 +26,9 @@ and the run's sections: ``floor_image``, ``klt``, ``keyframe``, ``kinematics``, 
 ``features`` (``gpo.pipeline.config.load_config``). Every section and key is checked before anything runs: types,
 ranges, finite numbers, and unknown keys at every level (with the nearest known one). The ``klt``, ``keyframe``,
 ``fusion`` and ``features`` sections are the fields of ``KLTParameters``, ``KeyframePolicy``, ``FusionSettings`` and
-``FeatureParameters`` themselves, so a field added there is a key of the file at once; a key of the other sections is one line of its section below.
-Errors name the file, the key and what is allowed; YAML errors name the line. A document whose aliases would
-expand beyond ``MAX_NODES`` nodes (a "billion laughs") is refused before it is built.
+``FeatureParameters`` themselves, so a field added there is a key of the file at once; a key of the other sections
+is one line of its section below. Errors name the file, the key and what is allowed; YAML errors name the line. A
+document whose aliases would expand beyond ``MAX_NODES`` nodes (a "billion laughs") is refused before it is built.
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
 """``gpo-rigid``: no kinematic model; the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
-frame's increment."""
+increment since the frame they start in: the keyframe (``KEYFRAMES``), so that the small error of each fit's rotation
+is made once per keyframe, not once per frame."""
 
 from __future__ import annotations
 
