@@ -59,28 +59,22 @@ def noise_draw(seed: int) -> tuple[str, Setup]:
     return f"keyframe-path-noise{seed}", setup
 
 
-def rows_of(label: str, bag, overrides: dict, methods: list[str]) -> list[dict]:
-    """Each method on ``bag`` frame-to-frame and with keyframes, its config the shipped one with ``overrides``."""
+def print_runs(label: str, bag, overrides: dict, methods: list[str]) -> None:
+    """Each method on ``bag`` frame-to-frame and with keyframes, its config the shipped one with ``overrides``: one
+    printed row each."""
     with Recording(bag) as recorded:
         truth = recorded.trajectory(GROUND_TRUTH_TOPIC)
-    rows = []
     for method in methods:
         for policy, changes in POLICIES.items():
             config = configured(Run(str(bag), label, overrides={**overrides, "odometry.method": method, **changes}))
             result = run(bag, config, progress=False, threads=1)
             error = final_error(result.trajectory, truth)
-            rows.append({
-                "run": label, "method": method, "tracking": policy, "distance_m": round(error.distance_m, 2),
-                "final_error_percent": round(error.percent, 3),
-                "heading_error_deg": round(math.degrees(error.heading_rad), 2),
-                "frames_not_measured": len(result.records) - 1 - result.summary()["frames_measured"],
-                "frames_per_second": round(result.frames_per_second),
-            })
-            row = rows[-1]
-            print(f"{label:34s} {method:10s} {policy:15s} {row['distance_m']:5.2f} m {row['final_error_percent']:7.3f} % "
-                  f"{row['heading_error_deg']:+7.2f}° {row['frames_not_measured']:4d} {row['frames_per_second']:5d}",
-                  flush=True)
-    return rows
+            not_measured = len(result.records) - 1 - result.summary()["frames_measured"]
+            print(
+                f"{label:34s} {method:10s} {policy:15s} {error.distance_m:5.2f} m {error.percent:8.3f} % "
+                f"{math.degrees(error.heading_rad):+7.2f}° {not_measured:8d} {result.frames_per_second:8.0f}",
+                flush=True,
+            )
 
 
 def main() -> None:
@@ -91,14 +85,14 @@ def main() -> None:
     args = parser.parse_args()
     if any(seed % 2 for seed in args.draws):
         parser.error("--draws takes even seeds (the fisheye rigs)")
-    print(f"{'run':34s} {'method':10s} {'tracking':15s} distance  final error  heading  not measured  frames/s")
+    print(f"{'run':34s} {'method':10s} {'tracking':15s} distance  final error  heading  unmeasured  frames/s")
     for seed in range(1, args.noise_draws + 1):
         label, setup = noise_draw(seed)
-        rows_of(label, recording(setup, label=label, progress=False), {}, args.methods)
+        print_runs(label, recording(setup, label=label, progress=False), {}, args.methods)
     for seed in args.draws:
         chosen = matte(draw(seed))
         label = f"{chosen.label}-matte"
-        rows_of(label, recording(chosen.setup, label=label, progress=False), adapted(chosen), args.methods)
+        print_runs(label, recording(chosen.setup, label=label, progress=False), adapted(chosen), args.methods)
 
 
 if __name__ == "__main__":
