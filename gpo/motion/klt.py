@@ -73,7 +73,8 @@ class KLTParameters:
     ``window_px`` (odd) and ``pyramid_levels``: ``cv2.calcOpticalFlowPyrLK``'s window and pyramid; the pyramid
     reaches a motion of about ``window_px / 2 * 2**pyramid_levels`` pixels. ``max_iterations`` and ``epsilon_px``:
     its stopping rule. ``forward_backward_px``: a track is kept when tracking it back ends this close to where it
-    started. ``redetect_below``: fewer tracks than this left, corners are detected afresh. ``min_tracks`` and
+    started. ``redetect_below``: fewer tracks than this left, corners are detected afresh (frame-to-frame; a keyframe's
+    corners are detected afresh at every keyframe). ``min_tracks`` and
     ``min_kept_ratio``: fewer kept than this many, or than this share of the tracks followed, the frame is flagged.
     ``inlier_px``: a vector is an inlier when it lies this close to the median, or within three robust sigmas of
     it if they are wider; fewer than ``min_inlier_ratio`` of the kept vectors inliers flags the frame (no
@@ -326,13 +327,13 @@ class FloorFlow:
             lk["maxLevel"] = 0
         back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, reference, end, end - shift, **lk)
         start, end, back = start.reshape(-1, 2), end.reshape(-1, 2), back.reshape(-1, 2)
-        change = median_of(end - start - shift.reshape(-1, 2), axis=0)  # what the pyramid had to find
+        found = end - start - shift.reshape(-1, 2)  # what the pyramid had to find beyond each search's start
         if turn is not None:
             end = turn.from_view(end)
         keep = (status.ravel() == 1) & (back_status.ravel() == 1)
         keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2
         keep &= self._inside(end)
-        start, end = start[keep], end[keep]
+        start, end, found = start[keep], end[keep], found[keep]
         if len(start) < max(p.min_tracks, p.min_kept_ratio * len(points)):
             flag = f"too few tracks kept ({len(start)} of {len(points)}): a bad or blurred frame"
             return _flagged(start, end, len(points), flag), keep
@@ -343,7 +344,7 @@ class FloorFlow:
         inlier = distance <= max(p.inlier_px, 3.0 * spread)
         quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=slower_count(vectors, median))
         flag = None
-        change = np.hypot(*change)
+        change = np.hypot(*median_of(found, axis=0))
         if quality.inlier_ratio < p.min_inlier_ratio:
             flag = f"no consensus: {quality.inliers} of {quality.kept} vectors near the median"
         elif change > 0.8 * p.reach_px:
