@@ -524,6 +524,11 @@ class FeatureTracker:
         """Forget the previous frame: the next ``track`` call starts afresh."""
         self._previous = None
 
+    @property
+    def keyframe_is_latest(self) -> bool:
+        """Always True: each frame is matched with the one before it (``gpo.motion.klt.FloorFlow`` has keyframes)."""
+        return True
+
     def track(self, image: np.ndarray, mask=None) -> FeatureMatches | None:
         """The matches from the previous frame to ``image`` (H, W) uint8, ``mask`` as for ``detect``."""
         seconds = {}

@@ -10,6 +10,12 @@ backward search runs on the full-resolution image only: a right track is then a 
 The kept tracks' vectors give the frame's **median** motion vector, robust to the outliers that moving objects
 and highlights make, and the mean, for the first paper's comparison (its Table 3).
 
+With a ``KeyframePolicy`` (``gpo.motion.keyframes``) of more than one frame, the tracks are measured from a keyframe
+instead of the previous frame: the keyframe's corners are followed into each new frame, each search starting where the
+track was in the previous frame plus the median motion, until too few of them are left or the policy's frames are
+used up; then the latest frame becomes the keyframe (its corners detected afresh). A measurement's ``start`` points
+then lie in the keyframe, and ``keyframe_is_latest`` says when the next frame is measured from the latest one.
+
 Each frame gets a ``FlowQuality``; a frame that cannot be measured is flagged with the reason, never turned into
 a wrong vector: no texture (no local contrast beyond the sensor's noise, ``floor_texture``), too few corners, too
 few tracks kept (a bad frame, motion blur), vectors that disagree (no consensus), or a change of motion near the
@@ -35,6 +41,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from gpo.motion.keyframes import FRAME_TO_FRAME, KeyframePolicy
 from gpo.motion.layers import slower_count, slower_layer
 from gpo.motion.median import median_of
 from gpo.motion.overview import Overview, OverviewShift, disagrees
@@ -70,7 +77,8 @@ class KLTParameters:
     ``window_px`` (odd) and ``pyramid_levels``: ``cv2.calcOpticalFlowPyrLK``'s window and pyramid; the pyramid
     reaches a motion of about ``window_px / 2 * 2**pyramid_levels`` pixels. ``max_iterations`` and ``epsilon_px``:
     its stopping rule. ``forward_backward_px``: a track is kept when tracking it back ends this close to where it
-    started. ``redetect_below``: fewer tracks than this left, corners are detected afresh. ``min_tracks`` and
+    started. ``redetect_below``: fewer tracks than this left, corners are detected afresh (frame-to-frame; a keyframe's
+    corners are detected afresh at every keyframe). ``min_tracks`` and
     ``min_kept_ratio``: fewer kept than this many, or than this share of the tracks followed, the frame is flagged.
     ``inlier_px``: a vector is an inlier when it lies this close to the median, or within three robust sigmas of
     it if they are wider; fewer than ``min_inlier_ratio`` of the kept vectors inliers flags the frame (no
@@ -221,7 +229,8 @@ class FlowFrame:
 
 @dataclass
 class FloorFlow:
-    """Frame-to-frame KLT tracking on a stream of floor images of one size.
+    """KLT tracking on a stream of floor images of one size, each frame against the one before it or, with a
+    ``keyframe`` policy of more than one frame, against a keyframe (see the module).
 
     ``mask`` (H, W) bool or uint8, optional: where corners may be detected (the floor image's valid pixels);
     it is shrunk by half a window so that no corner's window leaves it. Call ``track(image)`` once per
@@ -231,12 +240,17 @@ class FloorFlow:
 
     parameters: KLTParameters = field(default_factory=KLTParameters)
     mask: np.ndarray | None = None
-    _image: np.ndarray | None = field(default=None, init=False, repr=False)
+    keyframe: KeyframePolicy = FRAME_TO_FRAME
+    _image: np.ndarray | None = field(default=None, init=False, repr=False)  # the keyframe (or the previous frame)
     _texture: float = field(default=0.0, init=False, repr=False)
     _velocity: np.ndarray = field(default_factory=lambda: np.zeros(2, np.float32), init=False, repr=False)
     _predicted: bool = field(default=False, init=False, repr=False)
     _time_s: float = field(default=0.0, init=False, repr=False)
-    _points: np.ndarray | None = field(default=None, init=False, repr=False)
+    _points: np.ndarray | None = field(default=None, init=False, repr=False)  # tracks to follow, in the keyframe
+    _last: np.ndarray | None = field(default=None, init=False, repr=False)  # where they were in the latest frame
+    _corners: int = field(default=0, init=False, repr=False)  # the keyframe's tracks at its start
+    _frames: int = field(default=0, init=False, repr=False)  # frames measured against the keyframe so far
+    _fresh: bool = field(default=False, init=False, repr=False)  # the keyframe's tracks are corners detected in it
     _detect_mask: np.ndarray | None = field(default=None, init=False, repr=False)
     _valid: np.ndarray | None = field(default=None, init=False, repr=False)
     _size: tuple[int, int] | None = field(default=None, init=False, repr=False)
@@ -244,8 +258,15 @@ class FloorFlow:
 
     def restart(self) -> None:
         """Forget the previous frame: the next ``track`` call starts afresh."""
-        self._image, self._points, self._overview = None, None, None
+        self._image, self._points, self._last, self._frames = None, None, None, 0
+        self._overview = None
         self._velocity, self._predicted = np.zeros(2, np.float32), False
+
+    @property
+    def keyframe_is_latest(self) -> bool:
+        """Whether the next frame is measured from the latest frame tracked (it became the keyframe), not from an
+        earlier one."""
+        return self._frames == 0
 
     def prepare(self, image: np.ndarray, overview: np.ndarray | None = None) -> FlowFrame:
         """``image`` (H, W) uint8 made ready to track (``FlowFrame``), with the wider ``overview`` of the same frame
@@ -256,8 +277,8 @@ class FloorFlow:
         return FlowFrame(*self._normalised(image), wide)
 
     def track(self, image: np.ndarray | FlowFrame, time_s: float | None = None) -> FlowMeasurement | None:
-        """The motion from the previous frame to ``image`` (H, W) uint8, or to the frame ``prepare`` made of it;
-        None for the first frame.
+        """The motion from the keyframe (the previous frame, frame-to-frame) to ``image`` (H, W) uint8, or to the
+        frame ``prepare`` made of it; None for the first frame.
 
         ``time_s``: the frame's time in seconds, so that the predicted motion scales with the time since the
         previous frame (a dropped frame doubles it); None counts frames instead.
@@ -268,51 +289,82 @@ class FloorFlow:
             image = self.prepare(image)
         found = self._observe(image.overview)
         image, texture = image.image, image.texture
-        previous, points, previous_texture = self._image, self._points, self._texture
-        elapsed = 1.0 if time_s is None or previous is None else time_s - self._time_s
-        self._image, self._texture, self._time_s = image, texture, 0.0 if time_s is None else time_s
-        if previous is None:
-            self._points = self._detect(image)
+        reference, points, last = self._image, self._points, self._last
+        elapsed = 1.0 if time_s is None or reference is None else time_s - self._time_s
+        self._time_s = 0.0 if time_s is None else time_s
+        if reference is None:
+            self._new_keyframe(image, texture, self._detect(image), detected=True)
             return None
-        if min(texture, previous_texture) < self.parameters.min_texture_grey:
-            self._points, self._predicted = np.zeros((0, 2), np.float32), False
-            flag = f"no texture: local contrast {min(texture, previous_texture):.1f} grey levels"
-            return _flagged(self._points, self._points, 0, flag)
-        if len(points) < self.parameters.redetect_below:
-            points = self._detect(previous)
+        if min(texture, self._texture) < self.parameters.min_texture_grey:
+            flag = f"no texture: local contrast {min(texture, self._texture):.1f} grey levels"
+            nothing = np.zeros((0, 2), np.float32)
+            self._new_keyframe(image, texture, nothing)
+            self._predicted = False
+            return _flagged(nothing, nothing, 0, flag)
+        if not self._fresh and len(points) < self.parameters.redetect_below:
+            self._new_keyframe(reference, self._texture, self._detect(reference), detected=True)
+            points, last = self._points, self._last
         prediction = (self._velocity * elapsed).astype(np.float32)
-        measurement, surviving = self._measure(previous, image, points, prediction)
+        measurement, kept = self._measure(reference, image, points, (last - points) + prediction)
         if found is not None:
-            measurement = self._checked(measurement, found)
-        self._points = surviving
+            measurement = self._checked(measurement, found, last, kept)
+        if measurement.quality.overview:  # a translation from the previous frame: the next start from this one
+            self._velocity, self._predicted = (measurement.median / elapsed).astype(np.float32), True
+            self._new_keyframe(image, texture, self._detect(image), detected=True)
+            return measurement
         self._predicted = measurement.quality.ok
         if measurement.quality.ok:
-            self._velocity = (measurement.median / elapsed).astype(np.float32)
+            self._velocity = (median_of(measurement.end - last[kept], axis=0) / elapsed).astype(np.float32)
+        self._frames += 1
+        followed = len(measurement.start)
+        if measurement.quality.ok and self.keyframe.keeps(followed, self._corners, self._frames):
+            self._points, self._last = measurement.start, measurement.end
+        else:
+            self._new_keyframe(image, texture, measurement.end if kept is not None else points)
         return measurement
 
-    def _measure(self, previous, image, points, prediction) -> tuple[FlowMeasurement, np.ndarray]:
+    def _new_keyframe(self, image: np.ndarray, texture: float, points: np.ndarray, detected: bool = False) -> None:
+        """``image`` becomes the keyframe, ``points`` (N, 2) its tracks to follow (the tracks that reached it), or,
+        with keyframes of more than one frame, its own corners detected afresh, spread over the whole floor image."""
+        if not detected and self.keyframe.max_frames > 1:
+            points, detected = self._detect(image), True
+        self._image, self._texture, self._points, self._last = image, texture, points, points
+        self._corners, self._frames, self._fresh = len(points), 0, detected
+
+    def _measure(self, reference, image, points, shift) -> tuple[FlowMeasurement, np.ndarray | None]:
+        """The tracks from ``points`` (N, 2) in ``reference`` to ``image``, each search starting ``shift`` (N, 2 or 2)
+        pixels from its point; the measurement and which of the points it kept (None: too few to follow)."""
         p = self.parameters
         nothing = np.zeros((0, 2), np.float32)
         if len(points) < p.min_tracks:
             flag = f"too few corners ({len(points)} < {p.min_tracks}): no texture to track"
-            return _flagged(nothing, nothing, len(points), flag), points
+            return _flagged(nothing, nothing, len(points), flag), None
         criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, p.max_iterations, p.epsilon_px)
         window = (p.window_px, p.window_px)
         start = points.reshape(-1, 1, 2)
+        shift = np.broadcast_to(shift, points.shape).reshape(-1, 1, 2)
+        guess = (start + shift).reshape(-1, 2)  # where each search starts
+        turn = None if self.keyframe.max_frames == 1 else _Turn.between(points, guess, image.shape)
+        if turn is not None:  # the frame turned back onto the keyframe, the searches' starts with it
+            image = turn.view(image)
+            shift = turn.to_view(guess).reshape(-1, 1, 2) - start
         lk = {"winSize": window, "maxLevel": p.pyramid_levels, "criteria": criteria}
         lk["flags"] = cv2.OPTFLOW_USE_INITIAL_FLOW
-        end, status, _ = cv2.calcOpticalFlowPyrLK(previous, image, start, start + prediction, **lk)
+        end, status, _ = cv2.calcOpticalFlowPyrLK(reference, image, start, start + shift, **lk)
         if self._predicted:
             lk["maxLevel"] = 0
-        back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, previous, end, end - prediction, **lk)
+        back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, reference, end, end - shift, **lk)
         start, end, back = start.reshape(-1, 2), end.reshape(-1, 2), back.reshape(-1, 2)
+        found = end - start - shift.reshape(-1, 2)  # what the pyramid had to find beyond each search's start
+        if turn is not None:
+            end = turn.from_view(end)
         keep = (status.ravel() == 1) & (back_status.ravel() == 1)
         keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2
         keep &= self._inside(end)
-        start, end = start[keep], end[keep]
+        start, end, found = start[keep], end[keep], found[keep]
         if len(start) < max(p.min_tracks, p.min_kept_ratio * len(points)):
             flag = f"too few tracks kept ({len(start)} of {len(points)}): a bad or blurred frame"
-            return _flagged(start, end, len(points), flag), end
+            return _flagged(start, end, len(points), flag), keep
         vectors = end - start
         median = median_of(vectors, axis=0)
         distance = np.hypot(*(vectors - median).T)
@@ -320,15 +372,15 @@ class FloorFlow:
         inlier = distance <= max(p.inlier_px, 3.0 * spread)
         quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=slower_count(vectors, median))
         flag = None
+        change = np.hypot(*median_of(found, axis=0))
         if quality.inlier_ratio < p.min_inlier_ratio:
             flag = f"no consensus: {quality.inliers} of {quality.kept} vectors near the median"
-        elif np.hypot(*(median - prediction)) > 0.8 * p.reach_px:
-            change = np.hypot(*(median - prediction))
+        elif change > 0.8 * p.reach_px:
             flag = f"too fast: the motion changed by {change:.0f} px, near the pyramid's reach {p.reach_px:.0f} px"
         if flag:
-            return _flagged(start, end, len(points), flag, inlier, spread), end
+            return _flagged(start, end, len(points), flag, inlier, spread), keep
         measurement = FlowMeasurement(start, end, median, vectors.mean(axis=0), inlier, quality)
-        return measurement, end
+        return measurement, keep
 
     def _observe(self, view: np.ndarray | None) -> OverviewShift | None:
         """The whole-view check's shift into this frame's wider ``view`` (``gpo.motion.overview``), or None."""
@@ -338,11 +390,15 @@ class FloorFlow:
             self._overview = Overview(self.parameters.overview_scale, view.shape[::-1])
         return self._overview.observe(view)
 
-    def _checked(self, measurement: FlowMeasurement, found: OverviewShift) -> FlowMeasurement:
-        """``measurement``, or the whole-view check's translation where it disagrees (``gpo.motion.overview``): the
-        overview's shift measured at the floor image's middle, a ``OVERVIEW_GRID`` square grid of points."""
+    def _checked(
+        self, measurement: FlowMeasurement, found: OverviewShift, last: np.ndarray, kept: np.ndarray | None
+    ) -> FlowMeasurement:
+        """``measurement``, or where the tracks' motion since the previous frame (their ends less ``last``, where the
+        ``kept`` ones were then) disagrees with the whole-view check's shift (``gpo.motion.overview``), that shift
+        measured at the floor image's middle from the previous frame: a ``OVERVIEW_GRID`` square grid of points."""
         p = self.parameters
-        if not disagrees(measurement.median, measurement.flag, found, p.overview_tolerance_px, p.overview_min_peak):
+        moved = measurement.median if kept is None or measurement.flag else median_of(measurement.end - last[kept], 0)
+        if not disagrees(moved, measurement.flag, found, p.overview_tolerance_px, p.overview_min_peak):
             return measurement
         width, height = self._size
         u, v = np.meshgrid(*(np.linspace(0.25, 0.75, OVERVIEW_GRID) * (side - 1) for side in (width, height)))
@@ -413,6 +469,49 @@ class FloorFlow:
         inside = (u >= 0) & (u < width) & (v >= 0) & (v < height)
         inside[inside] = self._detect_mask[v[inside], u[inside]] > 0
         return inside
+
+
+TURN_VIEW_RAD = np.radians(1.0)  # a frame turned further than this from its keyframe is tracked in a view turned back
+
+
+@dataclass(frozen=True)
+class _Turn:
+    """A frame seen turned back by ``angle`` radians about the image's ``centre`` (u, v) pixels, so that a keyframe's
+    KLT windows, square and unturned, meet the floor as they left it: Lucas-Kanade follows a shift, not a turn, and
+    reads a turn of a few degrees across its windows short."""
+
+    angle: float
+    centre: np.ndarray
+
+    @classmethod
+    def between(cls, points: np.ndarray, moved: np.ndarray, shape: tuple[int, int]) -> _Turn | None:
+        """The turn that takes ``points`` (N, 2) to ``moved`` (N, 2) in an image of ``shape`` (H, W), or None when it is
+        under ``TURN_VIEW_RAD`` (a window then follows the floor well enough)."""
+        a, b = points - points.mean(axis=0), moved - moved.mean(axis=0)
+        angle = float(np.arctan2(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]), np.sum(a * b)))
+        if abs(angle) < TURN_VIEW_RAD:
+            return None
+        return cls(angle, np.array([(shape[1] - 1) / 2, (shape[0] - 1) / 2], np.float32))
+
+    @property
+    def _rotation(self) -> np.ndarray:
+        cos, sin = np.cos(self.angle), np.sin(self.angle)
+        return np.array([[cos, -sin], [sin, cos]], np.float32)
+
+    def view(self, image: np.ndarray) -> np.ndarray:
+        """``image`` turned back: the view's pixel x shows the image's ``from_view(x)`` (bilinear)."""
+        rotation = self._rotation
+        warp = np.hstack([rotation, (self.centre - rotation @ self.centre)[:, None]])
+        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
+        return cv2.warpAffine(image, warp, image.shape[::-1], flags=flags, borderMode=cv2.BORDER_REPLICATE)
+
+    def to_view(self, pixels: np.ndarray) -> np.ndarray:
+        """The image's ``pixels`` (N, 2) where the view shows them."""
+        return ((pixels - self.centre) @ self._rotation + self.centre).astype(np.float32)
+
+    def from_view(self, pixels: np.ndarray) -> np.ndarray:
+        """The view's ``pixels`` (N, 2) where the image has them."""
+        return ((pixels - self.centre) @ self._rotation.T + self.centre).astype(np.float32)
 
 
 def floor_texture(detail: np.ndarray, valid: np.ndarray | None = None) -> float:

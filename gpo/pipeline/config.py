@@ -20,6 +20,7 @@ from gpo.cameras.targets import Chessboard, FloorBoard
 from gpo.floor_image.image import FLOOR_METRES_PER_PIXEL, FLOOR_X_RANGE_M, FLOOR_Y_RANGE_M, FloorImage
 from gpo.fusion import FusionSettings
 from gpo.io.outputs import write_text
+from gpo.motion.keyframes import KeyframePolicy
 from gpo.motion.keypoints import FeatureParameters
 from gpo.motion.klt import KLTParameters
 from gpo.odometry.estimators import ESTIMATORS, FloorEstimator
@@ -55,9 +56,10 @@ def methods() -> tuple[str, ...]:
 
 @dataclass(frozen=True, eq=False)
 class OdometryConfig:
-    """Everything a run needs: the ``rig``, the ``floor`` image, the KLT ``klt`` parameters, the paper's bicycle
-    ``model``, the ``method`` (one of ``methods()``: a floor estimator of ``gpo.odometry.estimators`` or ``fused``), the
-    ``vector`` statistic (median or mean; for ``gpo`` and
+    """Everything a run needs: the ``rig``, the ``floor`` image, the KLT ``klt`` parameters, the ``keyframe`` policy
+    of the estimators that measure from keyframes (``gpo.motion.keyframes``; the paper's ``gpo`` measures frame to
+    frame whatever it says), the paper's bicycle ``model``, the ``method`` (one of ``methods()``: a floor estimator of
+    ``gpo.odometry.estimators`` or ``fused``), the ``vector`` statistic (median or mean; for ``gpo`` and
     ``gpo-exact``), ``max_gap_s``, the longest time the robot coasts or a frame gap is bridged, seconds, the
     ``fusion`` settings of the ``fused`` method, and the ``route`` that makes the floor image (``floor_table``):
 
@@ -74,6 +76,7 @@ class OdometryConfig:
     rig: Rig
     floor: FloorImage
     klt: KLTParameters = field(default_factory=KLTParameters)
+    keyframe: KeyframePolicy = field(default_factory=KeyframePolicy)
     model: PaperBicycle | None = None
     method: str = "gpo-exact"
     vector: str = "median"
@@ -125,8 +128,8 @@ class OdometryConfig:
 
 def load_config(path=None) -> OdometryConfig:
     """The run config of a config YAML (checked by ``gpo.pipeline.schema.read_config``) with the sections
-    ``floor_image``, ``klt``, ``kinematics``, ``odometry``, ``fusion`` and ``features``; None loads the shipped
-    default for the simulated T265 rig. Errors name the file and the key."""
+    ``floor_image``, ``klt``, ``keyframe``, ``kinematics``, ``odometry``, ``fusion`` and ``features``; None loads the
+    shipped default for the simulated T265 rig. Errors name the file and the key."""
     if path is None:
         with resources.as_file(resources.files("gpo") / "configs" / DEFAULT_CONFIG) as default:
             return load_config(default)
@@ -145,8 +148,8 @@ def config_from(document: ConfigFile, path: Path, where: str | None = None) -> O
     try:
         floor = _floor_image(document.floor_image)
         return OdometryConfig(
-            rig, floor, document.klt, model, **odometry, fusion=document.fusion, features=document.features,
-            **_route(document.floor_image, path),
+            rig, floor, document.klt, document.keyframe, model, **odometry, fusion=document.fusion,
+            features=document.features, **_route(document.floor_image, path),
         )
     except ValueError as error:
         raise ValueError(f"{where}: {error}") from None
@@ -164,6 +167,7 @@ def config_to_dict(config: OdometryConfig) -> dict:
             **_route_to_dict(config),
         },
         "klt": {f.name: getattr(config.klt, f.name) for f in fields(config.klt)},
+        "keyframe": {f.name: getattr(config.keyframe, f.name) for f in fields(config.keyframe)},
         "kinematics": {
             "wheelbase_m": config.model.wheelbase_m,
             "rear_to_reference_m": config.model.rear_to_reference_m,

@@ -14,12 +14,11 @@ from gpo.floor_image.analytic import analytic_table
 from gpo.floor_image.gpi import ground_plane_image
 from gpo.floor_image.image import GroundImageError, RemapTable
 from gpo.floor_image.ortho import ortho_rectify
+from gpo.motion.keyframes import FRAME_TO_FRAME
 from gpo.motion.keypoints import FeatureMatches, FeatureTracker, Keypoints, detect
 from gpo.motion.klt import FloorFlow, FlowFrame, FlowMeasurement
 from gpo.odometry.estimators import FloorGeometry
-from gpo.odometry.kinematics import (
-    compose,
-)
+from gpo.odometry.kinematics import between, compose
 from gpo.pipeline.config import OdometryConfig, Route
 
 
@@ -91,7 +90,10 @@ class FloorOdometer:
 
     The floor's motion comes from what the config's estimator reads (``FloorEstimator.MOTION``): the floor image's KLT
     flow (``gpo.motion.klt``) or matched keypoints (``gpo.motion.keypoints``); the estimator
-    (``gpo.odometry.estimators``) turns it into the frame's increment, composed into ``pose``."""
+    (``gpo.odometry.estimators``) turns it into the increment since the frame the motion was measured from, composed
+    onto that frame's pose. For an estimator that reads ``KEYFRAMES``, that frame is the KLT flow's keyframe (the
+    config's ``keyframe`` policy), so that the errors of the frames in between do not add up; else the previous
+    frame."""
 
     def __init__(self, config: OdometryConfig):
         self.config = config
@@ -103,9 +105,11 @@ class FloorOdometer:
             self.motion = FeatureTracker(config.features)
             self._mask = None if keypoints_route else self.table.valid.astype(np.uint8)
         else:
-            self.motion = FloorFlow(config.klt, mask=self.table.valid)
+            policy = config.keyframe if self.estimator.KEYFRAMES else FRAME_TO_FRAME
+            self.motion = FloorFlow(config.klt, mask=self.table.valid, keyframe=policy)
         self._overview_table = self._overview(config)
         self.pose = np.zeros(3)
+        self._keyframe: tuple[int, np.ndarray] | None = None  # the stamp (ns) and pose the motion is measured from
         self._stamp_ns: int | None = None
         self._measured_ns: int | None = None
         self._velocity = np.zeros(3)  # the last measured increment per second (dx, dy, dtheta)
@@ -190,14 +194,18 @@ class FloorOdometer:
             self._track(image, stamp_ns)
             self._velocity[:] = 0.0
             return self._record(stamp_ns, None, Status.HELD, f"frame gap: {dt:.2f} s without frames, motion unknown")
+        keyframe_ns, keyframe_pose = self._keyframe
         measurement = self._track(image, stamp_ns)
         if measurement.flag is not None:
             return self._coast(stamp_ns, dt, measurement, measurement.flag)
-        increment, why = self.estimator.increment(measurement, dt)
+        if isinstance(measurement, FlowMeasurement) and measurement.quality.overview:  # from the previous frame
+            keyframe_ns, keyframe_pose = previous, self.pose
+        increment, why = self.estimator.increment(measurement, (stamp_ns - keyframe_ns) * 1e-9)
         if increment is None:
             return self._coast(stamp_ns, dt, measurement, why)
-        self.pose = compose(self.pose, increment)
-        self._velocity = increment / dt
+        pose = compose(keyframe_pose, increment)
+        step = increment if keyframe_ns == previous else between(self.pose, pose)
+        self.pose, self._velocity = pose, step / dt
         self._measured_ns = stamp_ns
         return self._record(stamp_ns, measurement, Status.MEASURED)
 
@@ -215,6 +223,8 @@ class FloorOdometer:
         return self._record(stamp_ns, measurement, Status.HELD, why)
 
     def _record(self, stamp_ns, measurement, status, flag=None) -> FrameRecord:
+        if status is not Status.SKIPPED and self.motion.keyframe_is_latest:  # the next frame is measured from this one
+            self._keyframe = (int(stamp_ns), self.pose)  # step replaces the pose array, never changes it in place
         counts = (0, 0, 0, math.nan, 0, False) if measurement is None else measurement.counts
         pose = tuple(float(v) for v in self.pose)
         return FrameRecord(int(stamp_ns), pose, *counts[:4], status, flag, counts[4], counts[5])

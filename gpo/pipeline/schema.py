@@ -22,13 +22,13 @@
       image: /camera/fisheye1/image_raw
       camera_info: /camera/fisheye1/camera_info
 
-and the run's sections: ``floor_image``, ``klt``, ``kinematics``, ``odometry``, ``fusion``, ``features``
-(``gpo.pipeline.config.load_config``). Every section and key is checked before anything runs: types, finite numbers,
-unknown keys at every level (with the nearest known one), and every number against the range a real rig can have,
-with its unit (``gpo.motion.ranges``: one rule, one way of saying it). The ``klt``, ``fusion`` and ``features``
-sections are the fields of ``KLTParameters``, ``FusionSettings`` and ``FeatureParameters`` themselves, which check
-their own ranges, so a field added there is a key of the file at once; a key of the other sections is one line of its
-section below, its range in its type (``ranged``).
+and the run's sections: ``floor_image``, ``klt``, ``keyframe``, ``kinematics``, ``odometry``, ``fusion``,
+``features`` (``gpo.pipeline.config.load_config``). Every section and key is checked before anything runs: types,
+finite numbers, unknown keys at every level (with the nearest known one), and every number against the range a real
+rig can have, with its unit (``gpo.motion.ranges``: one rule, one way of saying it). The ``klt``, ``keyframe``,
+``fusion`` and ``features`` sections are the fields of ``KLTParameters``, ``KeyframePolicy``, ``FusionSettings`` and
+``FeatureParameters`` themselves, which check their own ranges, so a field added there is a key of the file at once;
+a key of the other sections is one line of its section below, its range in its type (``ranged``).
 Errors name the file, the key and what is allowed; YAML errors name the line. The file is read by
 ``gpo.cameras.files.read_yaml``, which refuses a document whose aliases would expand beyond its limit (a "billion
 laughs") before it is built.
@@ -52,6 +52,7 @@ from gpo.cameras.files import Camera, camera_from_kalibr, camera_to_kalibr, load
 from gpo.cameras.rig import CameraMount, Rig
 from gpo.fusion import FusionSettings
 from gpo.io.outputs import write_text
+from gpo.motion.keyframes import KeyframePolicy
 from gpo.motion.keypoints import FeatureParameters
 from gpo.motion.klt import KLTParameters
 from gpo.motion.ranges import MAX_IMAGE_PX, REACH_M, OutOfRange, check_value
@@ -178,6 +179,7 @@ class ConfigFile(Section):
     topics: TopicsSection
     floor_image: FloorImageSection = FloorImageSection()
     klt: KLTParameters = KLTParameters()
+    keyframe: KeyframePolicy = KeyframePolicy()
     kinematics: KinematicsSection | None = None
     odometry: OdometrySection = OdometrySection()
     fusion: FusionSettings = FusionSettings()

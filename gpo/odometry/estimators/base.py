@@ -1,8 +1,9 @@
 """A floor motion estimator: the plug-in behind each ``odometry.method`` of a run config.
 
-An estimator turns one frame's measured floor motion into the robot's increment over the frame: (dx, dy, dtheta),
-base_link at the frame's end in base_link at its start, metres and radians (REP-103: x forward, y left, z up;
-dtheta positive counter-clockwise). It reads one kind of measurement (``MOTION``): ``tracks``, the floor image's
+An estimator turns a measured floor motion into the robot's increment over the time it spans (one frame, or from a
+keyframe to the latest frame for an estimator that reads ``KEYFRAMES``): (dx, dy, dtheta), base_link at the latest
+frame in base_link at the first, metres and radians (REP-103: x forward, y left, z up; dtheta positive
+counter-clockwise). It reads one kind of measurement (``MOTION``): ``tracks``, the floor image's
 KLT flow (``gpo.motion.klt.FlowMeasurement``), or ``keypoints``, matched keypoints
 (``gpo.motion.keypoints.FeatureMatches``); where those pixels lie on the floor is its ``FloorGeometry``.
 
@@ -80,15 +81,18 @@ class FloorEstimator(ABC):
     """One frame's floor motion in, the robot's increment out.
 
     ``NAME``: the method's name in configs and on the command line. ``MOTION``: the measurement it reads (``tracks``
-    or ``keypoints``); ``OVERVIEW``: whether the KLT flow it reads is checked on a wider view of the floor
-    (``gpo.motion.overview``: the suite's estimators, not the paper's). Made once per run from the run's ``config``
-    (a ``gpo.pipeline.config.OdometryConfig``, which the method's later stage defines: an estimator reads the
-    sections it needs, e.g. ``vector``, ``model``, ``features``) and the ``geometry`` of what it measures.
+    or ``keypoints``). ``KEYFRAMES``: whether it reads a measurement from a keyframe several frames back as well as
+    one from the previous frame (the config's ``keyframe`` policy, ``gpo.motion.keyframes``), or only the latter.
+    ``OVERVIEW``: whether the KLT flow it reads is checked on a wider view of the floor (``gpo.motion.overview``: the
+    suite's estimators, not the paper's). Made once per run from the run's ``config`` (a
+    ``gpo.pipeline.config.OdometryConfig``, which the method's later stage defines: an estimator reads the sections it
+    needs, e.g. ``vector``, ``model``, ``features``) and the ``geometry`` of what it measures.
     """
 
     NAME: ClassVar[str]
     MOTION: ClassVar[str] = "tracks"
     OVERVIEW: ClassVar[bool] = False  # whether its tracks are checked on a wider view (``gpo.motion.overview``)
+    KEYFRAMES: ClassVar[bool] = False
 
     def __init__(self, config: Any, geometry: FloorGeometry):
         self.config = config
@@ -96,8 +100,9 @@ class FloorEstimator(ABC):
 
     @abstractmethod
     def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
-        """The frame's increment (dx, dy, dtheta), or None and the reason why the measurement gives none; ``dt`` is
-        the frame's duration, seconds."""
+        """The increment (dx, dy, dtheta) over the time the measurement spans, from the frame its starts lie in (the
+        previous frame, or for a ``KEYFRAMES`` estimator the keyframe) to the latest, or None and the reason why the
+        measurement gives none; ``dt`` is that time, seconds."""
 
 
 def vector_motion(

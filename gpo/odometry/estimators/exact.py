@@ -3,6 +3,10 @@ does not slide at its rear axle (reverse driving and turning on the spot include
 
 On a glossy floor the tracks of the ceiling lights' reflections move slower than the floor's; only the floor's own
 layer counts (``gpo.motion.layers.floor_layer``).
+
+The tracks start in a keyframe (``KEYFRAMES``): the arc spans the frames since it. Where the robot's curvature changes
+within those frames, the one arc through the measured point's motion is an approximation; at the keyframe policy's
+few frames it reads a path's end closer than arcs of single frames, whose small errors add up.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ class ExactArc(FloorEstimator):
     """The exact arc that moves the measured floor point by the vector of the floor's own tracks."""
 
     NAME = "gpo-exact"
+    KEYFRAMES = True
     OVERVIEW = True
 
     def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:

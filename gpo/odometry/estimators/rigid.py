@@ -1,6 +1,8 @@
 """``gpo-rigid``: no kinematic model; the rigid 2-D motion of the kept tracks (RANSAC, then least squares) is the
-frame's increment. A frame measured by the whole-view check (``gpo.motion.overview``: a translation, no rotation)
-takes the exact arc of a robot that does not slide at its rear axle instead, as ``gpo-exact`` does."""
+increment since the frame they start in: the keyframe (``KEYFRAMES``), so that the small error of each fit's rotation
+is made once per keyframe, not once per frame. A frame measured by the whole-view check (``gpo.motion.overview``: a
+translation from the previous frame, no rotation) takes the exact arc of a robot that does not slide at its rear
+axle instead, as ``gpo-exact`` does."""
 
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ class RigidFit(FloorEstimator):
     """The rigid motion of the kept tracks, fitted on those RANSAC finds agreeing."""
 
     NAME = "gpo-rigid"
+    KEYFRAMES = True
     OVERVIEW = True
 
     def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
