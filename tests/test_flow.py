@@ -269,9 +269,9 @@ def _glossy_views(shift_px: float, frames: int, seed: int = 3) -> list[tuple[np.
 
 def test_the_whole_view_check_reads_the_floor_under_static_reflections():
     """The tracks alone are pulled towards the still reflections: 4.4 px off the floor's 6 px a frame on average
-    (measured; 3.9-4.4 px over seeds 3-5). The whole-view check replaces them wherever they disagree with it: 0.8 px
-    off (0.8-1.2 px over the seeds; its pixel is two floor-image pixels, and the reflections' own correlation peak
-    near no motion still pulls it a little)."""
+    (measured). The whole-view check replaces them wherever they disagree with it by over 1.5 px: 1.2 px off on
+    average (measured; the reflections' own correlation peak near no motion still pulls the whole view's shift, and
+    tracks within 1.5 px of it are kept), with 6 of the 13 frames replaced."""
     views = _glossy_views(6.0, 14)
     errors = {}
     for check in (False, True):
@@ -280,8 +280,8 @@ def test_the_whole_view_check_reads_the_floor_under_static_reflections():
         assert all(m.flag is None for m in measured)
         errors[check] = np.mean([np.hypot(m.median[0], m.median[1] + 6.0) for m in measured])
         replaced = sum(m.quality.overview for m in measured)
-        assert replaced >= 10 if check else replaced == 0  # 12 of the 13 frames replaced, measured
-    assert errors[False] > 3.5 and errors[True] < 1.0
+        assert replaced >= 4 if check else replaced == 0  # 6 of the 13 frames replaced, measured
+    assert errors[False] > 3.5 and errors[True] < 1.5  # 4.4 and 1.2 px, measured
 
 
 def test_the_whole_view_check_keeps_tracks_that_agree_with_it():
