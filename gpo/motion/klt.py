@@ -305,16 +305,16 @@ class FloorFlow:
             self._new_keyframe(reference, self._texture, self._detect(reference), detected=True)
             points, last = self._points, self._last
         prediction = (self._velocity * elapsed).astype(np.float32)
-        measurement, kept = self._measure(reference, image, points, (last - points) + prediction)
+        measurement, kept, frame_median = self._measure(reference, image, points, last, prediction)
         if found is not None:
-            measurement = self._checked(measurement, found, last, kept)
+            measurement = self._checked(measurement, found, frame_median)
         if measurement.quality.overview:  # a translation from the previous frame: the next start from this one
             self._velocity, self._predicted = (measurement.median / elapsed).astype(np.float32), True
             self._new_keyframe(image, texture, self._detect(image), detected=True)
             return measurement
         self._predicted = measurement.quality.ok
         if measurement.quality.ok:
-            self._velocity = (median_of(measurement.end - last[kept], axis=0) / elapsed).astype(np.float32)
+            self._velocity = (frame_median / elapsed).astype(np.float32)
         self._frames += 1
         followed = len(measurement.start)
         if measurement.quality.ok and self.keyframe.keeps(followed, self._corners, self._frames):
@@ -331,18 +331,25 @@ class FloorFlow:
         self._image, self._texture, self._points, self._last = image, texture, points, points
         self._corners, self._frames, self._fresh = len(points), 0, detected
 
-    def _measure(self, reference, image, points, shift) -> tuple[FlowMeasurement, np.ndarray | None]:
-        """The tracks from ``points`` (N, 2) in ``reference`` to ``image``, each search starting ``shift`` (N, 2 or 2)
-        pixels from its point; the measurement and which of the points it kept (None: too few to follow)."""
+    def _measure(
+        self, reference, image, points, last, prediction
+    ) -> tuple[FlowMeasurement, np.ndarray | None, np.ndarray | None]:
+        """The tracks from ``points`` (N, 2) in ``reference`` to ``image``, each search starting where the track was
+        in the latest frame (``last``, N, 2) moved by ``prediction`` (2,) pixels: the measurement, which of the points
+        it kept (None: too few to follow) and the median of the kept tracks' motions since the latest frame (pixels).
+
+        The frame's quality (the spread of the motions, the inliers, their consensus, a slower layer) is read from
+        the tracks' motions since the latest frame, which is the whole measurement frame-to-frame: measured from a
+        keyframe, the motion across the patch also differs by the turn since the keyframe, which is no error."""
         p = self.parameters
         nothing = np.zeros((0, 2), np.float32)
         if len(points) < p.min_tracks:
             flag = f"too few corners ({len(points)} < {p.min_tracks}): no texture to track"
-            return _flagged(nothing, nothing, len(points), flag), None
+            return _flagged(nothing, nothing, len(points), flag), None, None
         criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, p.max_iterations, p.epsilon_px)
         window = (p.window_px, p.window_px)
         start = points.reshape(-1, 1, 2)
-        shift = np.broadcast_to(shift, points.shape).reshape(-1, 1, 2)
+        shift = ((last - points) + prediction).reshape(-1, 1, 2)
         guess = (start + shift).reshape(-1, 2)  # where each search starts
         turn = None if self.keyframe.max_frames == 1 else _Turn.between(points, guess, image.shape)
         if turn is not None:  # the frame turned back onto the keyframe, the searches' starts with it
@@ -364,13 +371,14 @@ class FloorFlow:
         start, end, found = start[keep], end[keep], found[keep]
         if len(start) < max(p.min_tracks, p.min_kept_ratio * len(points)):
             flag = f"too few tracks kept ({len(start)} of {len(points)}): a bad or blurred frame"
-            return _flagged(start, end, len(points), flag), keep
-        vectors = end - start
-        median = median_of(vectors, axis=0)
-        distance = np.hypot(*(vectors - median).T)
+            return _flagged(start, end, len(points), flag), keep, None
+        vectors, moved = end - start, end - last[keep]  # since the keyframe; since the latest frame
+        frame_median = median_of(moved, axis=0)
+        distance = np.hypot(*(moved - frame_median).T)
         spread = MAD_TO_SIGMA * float(median_of(distance))
         inlier = distance <= max(p.inlier_px, 3.0 * spread)
-        quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=slower_count(vectors, median))
+        slower = slower_count(moved, frame_median)
+        quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=slower)
         flag = None
         change = np.hypot(*median_of(found, axis=0))
         if quality.inlier_ratio < p.min_inlier_ratio:
@@ -378,9 +386,10 @@ class FloorFlow:
         elif change > 0.8 * p.reach_px:
             flag = f"too fast: the motion changed by {change:.0f} px, near the pyramid's reach {p.reach_px:.0f} px"
         if flag:
-            return _flagged(start, end, len(points), flag, inlier, spread), keep
+            return _flagged(start, end, len(points), flag, inlier, spread), keep, None
+        median = frame_median if last is points else median_of(vectors, axis=0)
         measurement = FlowMeasurement(start, end, median, vectors.mean(axis=0), inlier, quality)
-        return measurement, keep
+        return measurement, keep, frame_median
 
     def _observe(self, view: np.ndarray | None) -> OverviewShift | None:
         """The whole-view check's shift into this frame's wider ``view`` (``gpo.motion.overview``), or None."""
@@ -390,14 +399,11 @@ class FloorFlow:
             self._overview = Overview(self.parameters.overview_scale, view.shape[::-1])
         return self._overview.observe(view)
 
-    def _checked(
-        self, measurement: FlowMeasurement, found: OverviewShift, last: np.ndarray, kept: np.ndarray | None
-    ) -> FlowMeasurement:
-        """``measurement``, or where the tracks' motion since the previous frame (their ends less ``last``, where the
-        ``kept`` ones were then) disagrees with the whole-view check's shift (``gpo.motion.overview``), that shift
-        measured at the floor image's middle from the previous frame: a ``OVERVIEW_GRID`` square grid of points."""
+    def _checked(self, measurement: FlowMeasurement, found: OverviewShift, moved: np.ndarray) -> FlowMeasurement:
+        """``measurement``, or where the tracks' median motion since the previous frame (``moved``) disagrees with the
+        whole-view check's shift (``gpo.motion.overview``), that shift measured at the floor image's middle from the
+        previous frame: a ``OVERVIEW_GRID`` square grid of points."""
         p = self.parameters
-        moved = measurement.median if kept is None or measurement.flag else median_of(measurement.end - last[kept], 0)
         if not disagrees(moved, measurement.flag, found, p.overview_tolerance_px, p.overview_min_peak):
             return measurement
         width, height = self._size
