@@ -40,8 +40,10 @@ def _path(frames: int = 30, blend: int = 10) -> np.ndarray:
 def _floor_image(floor: np.ndarray, pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """The floor image at ``pose`` as a camera of coarse pixels makes it: the floor sampled once per camera pixel
     (``CAMERA_PIXEL_PX`` floor-image pixels), each with its own noise (3 grey levels), then resampled bilinearly to
-    the floor image's 1 mm pixels, as the remap from a fisheye looking far ahead over the floor does. The floor image's
-    pixel (u, v) lies at x = AHEAD_M + (100 - v) mm, y = (100 - u) mm in base_link."""
+    the floor image's 1 mm pixels, as the remap from a fisheye looking far ahead over the floor does (the simulated
+    T265 rig's pixels cover up to 3 x 1.1 floor-image pixels at its patch's far edge; coarser ones here make the
+    effect plain in 60 frames). The floor image's pixel (u, v) lies at x = AHEAD_M + (100 - v) mm, y = (100 - u) mm in
+    base_link."""
     rows, columns = PATCH_PX // CAMERA_PIXEL_PX[0], PATCH_PX // CAMERA_PIXEL_PX[1]
     v, u = np.meshgrid(
         (np.arange(rows) + 0.5) * PATCH_PX / rows - 0.5,
