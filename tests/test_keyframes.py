@@ -83,15 +83,15 @@ def _heading_error_deg(policy: KeyframePolicy, images, truth) -> float:
 def test_a_keyframe_reads_the_heading_of_a_spin_and_a_straight_better_than_frame_to_frame(seed):
     """Each frame's noise drawn anew (``seed``) on one floor: frame-to-frame, every pair of frames reads the motion a
     little short (Lucas-Kanade's windows cling to the camera's coarse pixels), and 60 pairs end the 0.5 rad spin's
-    heading 1.67-2.09 degrees short (measured over six draws); against keyframes the same frames end within 0.17
-    degrees. Bounds: keyframes within 0.4 degrees (over twice the measured), and frame-to-frame still over 1.2 degrees,
-    so that the sequence keeps testing what keyframes are for."""
+    heading 1.86-2.28 degrees short (measured over twelve draws, seeds 0-11); measured from keyframes by the shipped
+    policy the same frames end 0.06-0.41 degrees off. Bounds: keyframes within 0.8 degrees (about twice the largest
+    measured), and frame-to-frame still over 1.2 degrees, so that the sequence keeps testing what keyframes are for."""
     floor, truth, rng = _floor(), _path(), np.random.default_rng(seed)
     images = [_floor_image(floor, pose, rng) for pose in truth]
     frame_to_frame = _heading_error_deg(FRAME_TO_FRAME, images, truth)
-    keyframes = _heading_error_deg(KeyframePolicy(min_overlap=0.5, max_frames=30), images, truth)
+    keyframes = _heading_error_deg(KeyframePolicy(), images, truth)
     assert abs(frame_to_frame) > 1.2
-    assert abs(keyframes) < 0.4
+    assert abs(keyframes) < 0.8
 
 
 def test_frame_to_frame_measures_every_frame_from_the_one_before():
