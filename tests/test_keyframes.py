@@ -40,8 +40,10 @@ def _path(frames: int = 30, blend: int = 10) -> np.ndarray:
 def _floor_image(floor: np.ndarray, pose: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """The floor image at ``pose`` as a camera of coarse pixels makes it: the floor sampled once per camera pixel
     (``CAMERA_PIXEL_PX`` floor-image pixels), each with its own noise (3 grey levels), then resampled bilinearly to
-    the floor image's 1 mm pixels, as the remap from a fisheye looking far ahead over the floor does. The floor image's
-    pixel (u, v) lies at x = AHEAD_M + (100 - v) mm, y = (100 - u) mm in base_link."""
+    the floor image's 1 mm pixels, as the remap from a fisheye looking far ahead over the floor does (the simulated
+    T265 rig's pixels cover up to 3 x 1.1 floor-image pixels at its patch's far edge; coarser ones here make the
+    effect plain in 60 frames). The floor image's pixel (u, v) lies at x = AHEAD_M + (100 - v) mm, y = (100 - u) mm in
+    base_link."""
     rows, columns = PATCH_PX // CAMERA_PIXEL_PX[0], PATCH_PX // CAMERA_PIXEL_PX[1]
     v, u = np.meshgrid(
         (np.arange(rows) + 0.5) * PATCH_PX / rows - 0.5,
@@ -81,15 +83,15 @@ def _heading_error_deg(policy: KeyframePolicy, images, truth) -> float:
 def test_a_keyframe_reads_the_heading_of_a_spin_and_a_straight_better_than_frame_to_frame(seed):
     """Each frame's noise drawn anew (``seed``) on one floor: frame-to-frame, every pair of frames reads the motion a
     little short (Lucas-Kanade's windows cling to the camera's coarse pixels), and 60 pairs end the 0.5 rad spin's
-    heading 1.67-2.09 degrees short (measured over six draws); against keyframes the same frames end within 0.17
-    degrees. Bounds: keyframes within 0.4 degrees (over twice the measured), and frame-to-frame still over 1.2 degrees,
-    so that the sequence keeps testing what keyframes are for."""
+    heading 1.86-2.28 degrees short (measured over twelve draws, seeds 0-11); measured from keyframes by the shipped
+    policy the same frames end 0.06-0.41 degrees off. Bounds: keyframes within 0.8 degrees (about twice the largest
+    measured), and frame-to-frame still over 1.2 degrees, so that the sequence keeps testing what keyframes are for."""
     floor, truth, rng = _floor(), _path(), np.random.default_rng(seed)
     images = [_floor_image(floor, pose, rng) for pose in truth]
     frame_to_frame = _heading_error_deg(FRAME_TO_FRAME, images, truth)
-    keyframes = _heading_error_deg(KeyframePolicy(min_overlap=0.5, max_frames=30), images, truth)
+    keyframes = _heading_error_deg(KeyframePolicy(), images, truth)
     assert abs(frame_to_frame) > 1.2
-    assert abs(keyframes) < 0.4
+    assert abs(keyframes) < 0.8
 
 
 def test_frame_to_frame_measures_every_frame_from_the_one_before():

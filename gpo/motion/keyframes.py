@@ -1,10 +1,12 @@
 """When a tracker measures a frame against an earlier keyframe instead of the frame before it (``KeyframePolicy``).
 
 A floor estimator that fits the motion of each pair of frames adds one error per pair: a rotation read from a floor
-patch 0.2 m wide is off by a little every frame, and the heading walks away by the square root of the frame count.
-Measured against a keyframe that stays while enough of it is still in view, the same error is made once per
-keyframe: the frames in between are each measured from the keyframe, and their errors do not add up. A new keyframe
-is the frame whose measurement left too little of the keyframe in view, or the last one the policy allows.
+patch 0.2 m wide is off by a little every frame, partly at random and partly with a sign (a floor image resampled
+from the camera's pixels carries their grid, fixed to the robot, and the tracks cling to it a little, reading each
+step short), and the heading walks away with the frame count. Measured against a keyframe that stays while enough of
+it is still in view, the same error is made once per keyframe: the frames in between are each measured from the
+keyframe, and their errors do not add up. A new keyframe is the frame whose measurement left too little of the
+keyframe in view, or the last one the policy allows.
 
 The tracker (``gpo.motion.klt.FloorFlow``) applies the policy; ``gpo.pipeline.odometer.FloorOdometer`` composes each
 measured pose onto the keyframe's. ``max_frames: 1`` is frame-to-frame tracking, the first paper's.
