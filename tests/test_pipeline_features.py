@@ -173,7 +173,7 @@ def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
     assert row.paper.samples == 51
     assert row.paper.distance_m == pytest.approx(0.5, abs=1e-3)
     # measured 2.00 mm, an RMSE of 1.06 mm and 0.589 % per 10 mm step (2.06 mm, 1.09 mm and 0.599 % on the sse4 path,
-    # .ci/fp-path; benchmarks/results/second_paper.json's shipped pipeline too): bounds of twice the measured. The end
+    # .ci/fp-path; chapter 08's shipped pipeline too): bounds of twice the measured. The end
     # is off across the stage, by the heading's noise over 50 steps: on three other floors (seeds 101-103) it ends
     # 0.22-0.51 mm off, as it did with OpenCV's own SIFT positions (0.28-1.68 mm; this floor 0.83 mm)
     assert row.paper.final_error_mm < 4.1 and row.paper.positioning_rmse_mm < 2.2
