@@ -3,6 +3,7 @@ matches checked against brute-force descriptor distances, wrong matches injected
 frame that cannot be measured gives."""
 
 import dataclasses
+from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -10,20 +11,24 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
+from gpo.floor_image.image import FloorImage
 from gpo.motion.keypoints import (
     SUPPORT_PER_SIZE,
     FeatureError,
     FeatureMatches,
     FeatureParameters,
     FeatureTracker,
+    Keypoints,
     choose_cardinality,
     detect,
     histogram_filter,
     invariance_check,
     match,
 )
+from gpo.odometry.estimators import FloorGeometry, RigidKeypoints
 from gpo.odometry.estimators.keypoints import degenerate, refit
 from gpo.odometry.kinematics import increment_from_point_pairs, rigid_fit, seen_after
+from gpo.sim.rigs import downward_rig
 
 SIZE = (320, 240)  # width, height
 
@@ -110,6 +115,37 @@ def test_orb_in_a_turn_needs_the_refit(angle_deg, shift):
     assert abs(angle_error) < 0.08 and shift_error < 0.2  # measured 0.043 deg and 0.11 px at most
     if angle_deg == 3.0:  # this frame's paper fit is well off: measured 0.46 deg
         assert abs(_errors(*rigid_fit(matches.start, matches.end), matrix)[0]) > 0.2
+
+
+def test_a_turn_seen_far_from_its_centre_is_read_in_full():
+    """A small turn (0.0106 rad, a spin at 0.37 rad/s at 35 frames a second) about a point 530 px from a 480 x 320
+    image's centre, as a camera far from the robot's centre sees it, on a floor whose keypoints are found 0.7 px
+    off (a smooth screed): the histogram filter keeps a patch of alike vectors and the paper's fit on it reads the
+    turn about a third short; started there, the refit (1.5 px) settles short as well. The estimator starts it from
+    the turn every pair makes about the kept pairs' centre when that explains more pairs. Matched by descriptors,
+    filtered and fitted as the pipeline does, in metres of a 1 mm floor image."""
+    floor = FloorImage.top_view((-0.16, 0.16), (-0.24, 0.24), 1e-3)  # 480 x 320 px
+    rig = downward_rig()
+    geometry = FloorGeometry(floor, rig.camera, rig.mount)
+    parameters = FeatureParameters(detector="sift")
+    estimator = RigidKeypoints(SimpleNamespace(features=parameters), geometry)
+    rng = np.random.default_rng(0)
+    turn, centre, errors = 0.0106, np.array([-60.0, 520.0]), []
+    rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    for _ in range(300):
+        start = rng.uniform([0, 0], [479, 319], (100, 2))
+        end = (start - centre) @ rotation.T + centre
+        descriptors = rng.standard_normal((100, 128)).astype(np.float32)
+        tracker = FeatureTracker(parameters)
+        for points in (start, end):
+            matches = tracker.follow(Keypoints(points + rng.normal(0.0, 0.7, points.shape), descriptors, np.ones(100)))
+        assert matches.flag is None
+        increment, _ = estimator.increment(matches, 1 / 35)
+        truth = increment_from_point_pairs(geometry.metres(start), geometry.metres(end))
+        errors.append(increment[2] / truth[2] - 1)
+    # the mean error measured +0.4 % (SE 0.57 %: SD 10 % a turn, over 300), on the avx2 and sse4 paths too; the refit
+    # from the paper's fit alone: -4.4 % (-5.9 % on another 300 turns)
+    assert abs(np.mean(errors)) < 0.03
 
 
 # ------------------------------------------------------------------------------------------ wrong matches

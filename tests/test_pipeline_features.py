@@ -39,10 +39,10 @@ def test_keypoints_on_a_wood_floor_follow_the_truth(wood):
     result = run(bag, load_config(CONFIG), progress=False)
     assert all(record.status in ("first", "measured") for record in result.records)
     error = final_error(result.trajectory, truth)
-    # measured 0.025 % (1.1 mm) and a heading RMSE of 0.063 deg (0.023 % and 0.063 deg on the sse4 path, .ci/fp-path),
+    # measured 0.021 % (0.9 mm) and a heading RMSE of 0.061 deg (0.020 % and 0.061 deg on the sse4 path, .ci/fp-path),
     # as benchmarks/results/features_odometry.json gives them: bounds of twice the measured
     assert error.percent < 0.05
-    assert evaluate(result.trajectory, truth).heading_rmse_deg < 0.13
+    assert evaluate(result.trajectory, truth).heading_rmse_deg < 0.12
 
 
 def test_the_floor_image_route_follows_the_truth_too(wood):
@@ -126,10 +126,10 @@ def test_a_strongly_distorted_tilted_lens_reads_its_turns_right():
         result = odometry(images, shipped.replace(rig=_strong_lens(turned), features=features))
         assert all(record.status in ("first", "measured") for record in result.records)
         heading_error[turned] = math.degrees(result.records[-1].pose[2] - turn)
-    # the heading's noise on this path, measured on eight floors (seeds 1-8): -0.14 to +0.04 deg, SD 0.061 deg;
-    # seed 1 -0.044 deg: a bound of three SDs
+    # the heading's noise on this path, measured on eight floors (seeds 1-8): -0.14 to +0.04 deg, SD 0.060 deg;
+    # seed 1 -0.043 deg: a bound of three SDs
     assert abs(heading_error[False]) < 0.2
-    # measured at most 0.011 deg apart on the eight floors (seed 1: 0.007 deg)
+    # measured at most 0.011 deg apart on the eight floors (seed 1: 0.002 deg)
     assert abs(heading_error[False] - heading_error[True]) < 0.05
 
 
@@ -172,10 +172,10 @@ def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
     assert row.frames == 51
     assert row.paper.samples == 51
     assert row.paper.distance_m == pytest.approx(0.5, abs=1e-3)
-    # measured 2.00 mm, an RMSE of 1.06 mm and 0.589 % per 10 mm step (2.06 mm, 1.09 mm and 0.599 % on the sse4 path,
-    # .ci/fp-path; benchmarks/results/second_paper.json's shipped pipeline too): bounds of twice the measured. The end
+    # measured 2.04 mm, an RMSE of 1.08 mm and 0.594 % per 10 mm step (2.10 mm, 1.11 mm and 0.604 % on the sse4 path,
+    # .ci/fp-path; chapter 08's shipped pipeline too): bounds of twice the measured. The end
     # is off across the stage, by the heading's noise over 50 steps: on three other floors (seeds 101-103) it ends
-    # 0.22-0.51 mm off, as it did with OpenCV's own SIFT positions (0.28-1.68 mm; this floor 0.83 mm)
+    # 0.30-0.60 mm off, as it did with OpenCV's own SIFT positions (0.28-1.68 mm; this floor 0.83 mm)
     assert row.paper.final_error_mm < 4.1 and row.paper.positioning_rmse_mm < 2.2
     assert row.paper.relative_error_percent < 1.2  # per 10 mm step
 
