@@ -6,6 +6,7 @@ import pytest
 
 from gpo.motion.klt import TEXTURE_LAG_PX, FloorFlow, FlowError, KLTParameters, floor_texture
 from gpo.motion.layers import LAYER_MIN_TRACKS, floor_layer
+from gpo.motion.overview import OverviewShift, pulled_short
 from gpo.odometry.kinematics import increment_from_point_pairs
 
 
@@ -282,6 +283,25 @@ def test_the_whole_view_check_reads_the_floor_under_static_reflections():
         replaced = sum(m.quality.overview for m in measured)
         assert replaced >= 4 if check else replaced == 0  # 6 of the 13 frames replaced, measured
     assert errors[False] > 3.5 and errors[True] < 1.5  # 4.4 and 1.2 px, measured
+
+
+@pytest.mark.parametrize(
+    ("median", "flag", "shift", "peak", "replaced"),
+    [
+        ((-0.37, 0.75), None, (0.05, 13.31), 0.8, True),  # glossy preset, frame 109: the median near the still lamps
+        ((0.0, 5.0), None, (0.0, 9.0), 0.8, True),  # a blend of the two layers along the floor's motion
+        ((0.1, 13.3), None, (0.05, 13.31), 0.8, False),  # a matte floor: the two agree
+        ((0.0, 12.85), None, (-1.14, 11.81), 0.9, False),  # longer than the shift: no slower layer pulled it
+        ((-0.02, 2.07), None, (-6.34, 0.42), 0.6, False),  # Test1: a sheet dragged across, the robot starting off
+        ((0.0, 0.7), None, (-2.6, 0.5), 0.6, False),  # a shift under twice the tolerance: a crawl, not a pull
+        ((0.0, 0.0), None, (0.0, 9.0), 0.2, False),  # a peak no clearer than noise's
+        (None, "too few tracks kept", (0.0, 9.0), 0.8, True),  # a flagged flow
+    ],
+)
+def test_the_whole_view_replaces_a_median_only_where_a_slower_layer_pulled_it_short(median, flag, shift, peak,
+                                                                                       replaced):
+    median = None if median is None else np.array(median)
+    assert pulled_short(median, flag, OverviewShift(np.array(shift), peak), 1.5, 0.3) is replaced
 
 
 def test_the_whole_view_check_keeps_tracks_that_agree_with_it():

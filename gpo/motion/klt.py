@@ -44,7 +44,7 @@ import numpy as np
 from gpo.motion.keyframes import FRAME_TO_FRAME, KeyframePolicy
 from gpo.motion.layers import slower_count, slower_layer
 from gpo.motion.median import median_of
-from gpo.motion.overview import Overview, OverviewShift, disagrees
+from gpo.motion.overview import Overview, OverviewShift, pulled_short
 from gpo.motion.ranges import check_rules, in_range
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
@@ -91,8 +91,9 @@ class KLTParameters:
     no common mean and contrast), to see what the normalisation is for.
     ``overview_scale``: the whole-view check (``gpo.motion.overview``) correlates views this many times wider and
     longer than the floor image (0: no check; the estimators that take it say so); ``overview_tolerance_px``: a flow
-    median further than this from the overview's shift (floor-image pixels) is replaced by it, when the overview's
-    correlation peak reaches ``overview_min_peak``.
+    median within this of the overview's shift's line and short of it along the line by more (floor-image pixels) is
+    replaced by it (``gpo.motion.overview.pulled_short``), when the overview's correlation peak reaches
+    ``overview_min_peak``.
     """
 
     max_corners: int = 150
@@ -400,11 +401,11 @@ class FloorFlow:
         return self._overview.observe(view)
 
     def _checked(self, measurement: FlowMeasurement, found: OverviewShift, moved: np.ndarray) -> FlowMeasurement:
-        """``measurement``, or where the tracks' median motion since the previous frame (``moved``) disagrees with the
-        whole-view check's shift (``gpo.motion.overview``), that shift measured at the floor image's middle from the
+        """``measurement``, or where the tracks' median motion since the previous frame (``moved``) was pulled short of
+        the whole-view check's shift (``gpo.motion.overview``), that shift measured at the floor image's middle from the
         previous frame: a ``OVERVIEW_GRID`` square grid of points."""
         p = self.parameters
-        if not disagrees(moved, measurement.flag, found, p.overview_tolerance_px, p.overview_min_peak):
+        if not pulled_short(moved, measurement.flag, found, p.overview_tolerance_px, p.overview_min_peak):
             return measurement
         width, height = self._size
         u, v = np.meshgrid(*(np.linspace(0.25, 0.75, OVERVIEW_GRID) * (side - 1) for side in (width, height)))
