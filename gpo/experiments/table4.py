@@ -122,7 +122,7 @@ class Table4:
         rows = [row for row in PAPER_TABLE4.rows if row in ours]
         rank = {name: {row: k for k, row in enumerate(sorted(rows, key=means.get), 1)}
                 for name, means in (("paper", paper), ("here", ours))}
-        lines = [f"{'the paper rows by mean translation error':<38}{'the paper':>16}{'here':>16}"]
+        lines = [f"{'rank by mean translation error [m]':<38}{'the paper':>16}{'here':>16}"]
         for row in rows:
             mark = "" if rank["paper"][row] == rank["here"][row] else "   rank differs"
             lines.append(f"{row.label:<38}{rank['paper'][row]:>6d} ({paper[row]:.4f}){rank['here'][row]:>6d} "
