@@ -185,7 +185,8 @@ def test_cli_run_writes_trajectory_and_summary_and_a_bag_with_the_estimate(sampl
 
 
 # bounds of twice the measured final error, worst of the machine's, avx2 and sse4 paths (.ci/fp-path), measured from
-# keyframes: the ortho-GPI 0.026 % and 0.145 deg, the plain GPI, metric only near its four corners, 0.134 % and 0.393 deg
+# keyframes: the ortho-GPI 0.026 % and 0.145 deg, the plain GPI, metric only near its four corners, 0.134 % and
+# 0.393 deg
 @pytest.mark.parametrize(("route", "bound_percent", "bound_deg"), [("ortho-gpi", 0.053, 0.29), ("gpi", 0.27, 0.79)])
 def test_the_chessboard_routes_follow_the_sample(sample, route, bound_percent, bound_deg):
     path, _, truth = sample
