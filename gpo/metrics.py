@@ -27,25 +27,34 @@ APE         evo's absolute position error (``PoseRelation.translation_part``): t
             positions after the alignment, metres; RMSE, mean, median, max.
 RPE         evo's relative position error over consecutive segments of at least ``rpe_delta_m`` metres (default
             ``RPE_DELTA_M`` = 1 m) travelled by the truth (``delta_unit=Unit.meters``, pairs from the reference):
-            metres of error per segment. The relative error in % is its mean over the delta. It does not depend on
-            the alignment.
+            metres of error per segment. Its mean over the segment length, in %, is the suite's drift measure
+            (``Evaluation.drift_percent_per_m``). It does not depend on the alignment.
 final       ``final_error``'s definition after the chosen alignment: the distance between the last positions in the
             floor plane, metres and % of the distance the truth travelled, and the last heading difference.
 heading     the yaw (heading of base_link's x axis in the floor plane, ``atan2(R[1, 0], R[0, 0])``) of the estimate
             minus the truth's, wrapped to (-pi, pi]. evo's ``rotation_angle_deg`` is the full 3-D angle, which also
             counts tilt; heading here is the yaw alone. RMSE and final, degrees.
 
-The papers' numbers
--------------------
-First paper (Ground Plane Odometry), Table 4, "translation error": the final position error in metres after placing
-the estimate's first pose on the truth's (``translation_error``, the ``position_m`` of ``final_error``). Its Table 3
-lists, per test, the minimum, maximum and average of the "relative translation error" (so its text; its caption says
-"translation errors"): ``relative_translation_errors``, evo's RPE, translation part, over all pose pairs 1 m of travel
-apart.
+Each measure, its one definition and its name
+---------------------------------------------
+The papers' measures carry the papers' names; the suite's own are named for what they are.
 
-Second paper (floor feature odometer), Table 2, after aligning the first pose (``table2_metrics``): positioning
-RMSE (APE RMSE, metres), heading RMSE (degrees), final error in mm and in % of the distance travelled, and relative
-error (RPE mean per 1 m travelled, %). The paper does not spell the last one out; here it is the drift per metre.
+==============================  ======================================================================================
+first paper, Table 3,           ``relative_translation_errors``: evo's RPE, translation part, over every pair of
+"relative translation error"    poses ``TABLE3_DELTA_M`` = 1 m of the truth's travel apart; the table lists its
+                                minimum, maximum and average per test
+first paper, Table 4,           read here as ``final_error``'s ``position_m``, the first pose placed on the truth's
+"translation error"             (the paper says only that a trajectory evaluation toolbox computed the odometry's
+                                translation error against the ground truth, one number per test); its "mean
+                                localization error" of 0.058 m is that number averaged over its three tests (Table
+                                4's 0.0579 m), not a mean along a path
+second paper, Table 2           ``paper_table2`` (``PaperTable2``): positioning RMSE, heading RMSE, final error (mm,
+                                %), final heading and relative positioning error, at the samples its ground truth
+                                gives
+the suite's drift               ``Evaluation.drift_percent_per_m``: mean RPE over 1 m segments per metre, %
+the suite's position error      ``Evaluation.ape_m``: evo's APE after the chosen alignment (RMSE, mean, median, max)
+along the path
+==============================  ======================================================================================
 """
 
 from __future__ import annotations
@@ -192,7 +201,10 @@ def _yaw(trajectory: PoseTrajectory3D) -> np.ndarray:
 @dataclass(frozen=True)
 class FinalError:
     """The end of an estimated path against the truth: ``position_m`` in the floor plane, ``heading_rad`` (estimate
-    minus truth, wrapped to (-pi, pi]), over ``distance_m`` travelled by the truth, with ``poses`` associated."""
+    minus truth, wrapped to (-pi, pi]), over ``distance_m`` travelled by the truth, with ``poses`` associated.
+
+    After ``final_error`` (first pose placed on the truth's), ``position_m`` is the first paper's Table 4 "translation
+    error" and, with ``percent``, the second paper's Table 2 "final error": the one number both papers print."""
 
     position_m: float
     heading_rad: float
@@ -254,16 +266,6 @@ def truth_poses(truth: Trajectory, times) -> np.ndarray:
     return np.column_stack([np.interp(times, truth.times, values) for values in (*truth.positions[:, :2].T, yaw)])
 
 
-def translation_error(
-    estimate: Trajectory | PoseTrajectory3D,
-    truth: Trajectory | PoseTrajectory3D,
-    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
-) -> float:
-    """The first paper's "translation error" (its Table 4): the final position error in metres, in the floor plane,
-    after placing the estimate's first pose on the truth's. (Its Table 3's is ``relative_translation_errors``.)"""
-    return final_error(estimate, truth, max_difference_s).position_m
-
-
 @dataclass(frozen=True)
 class Statistics:
     """Summary of a metric's errors, in the metric's unit."""
@@ -303,23 +305,29 @@ class Evaluation:
     truth: Trajectory = field(compare=False, repr=False)
 
     @property
-    def relative_error_percent(self) -> float | None:
-        """Mean RPE over its segment length, %: drift per distance travelled (None without an RPE)."""
+    def drift_percent_per_m(self) -> float | None:
+        """The suite's drift: the mean RPE over its segments of ``rpe_delta_m`` travelled, per metre of them, in %
+        (metres of error per 100 m driven); None without an RPE. Neither paper's measure: the first paper's Table 3
+        lists the same segments' errors in metres (``relative_translation_errors``), the second paper's relative
+        positioning error is read at its ground-truth samples (``PaperTable2.relative_error_percent``)."""
         return None if self.rpe_m is None else 100.0 * self.rpe_m.mean / self.rpe_delta_m
 
-    def table2(self) -> dict[str, float | None]:
-        """The second paper's Table 2 columns; theirs when ``alignment`` is ``origin`` (see ``table2_metrics``)."""
+    def measures(self) -> dict[str, float | None]:
+        """The suite's measures by name, for tables: ``ape_rmse_m``, ``heading_rmse_deg``, ``final_error_mm``,
+        ``final_error_percent`` and ``drift_percent_per_m``. With the ``origin`` alignment and a ground truth at every
+        pose, the first four are the second paper's positioning RMSE, heading RMSE and final error as
+        ``paper_table2`` computes them; its relative positioning error is not among them."""
         return {
-            "positioning_rmse_m": self.ape_m.rmse,
+            "ape_rmse_m": self.ape_m.rmse,
             "heading_rmse_deg": self.heading_rmse_deg,
             "final_error_mm": self.final.position_m * 1e3,
             "final_error_percent": self.final.percent,
-            "relative_error_percent": self.relative_error_percent,
+            "drift_percent_per_m": self.drift_percent_per_m,
         }
 
     def table(self) -> str:
         """A readable multi-line table of every number: lengths in mm, angles in degrees."""
-        final, relative = self.final, self.relative_error_percent
+        final, drift = self.final, self.drift_percent_per_m
         rpe = f"none: the truth travels less than {self.rpe_delta_m:g} m"
         rows = {
             "alignment": str(self.alignment),
@@ -328,7 +336,7 @@ class Evaluation:
             "": "".join(f"{name:>9}" for name in ("rmse", "mean", "median", "max")),
             "APE position [mm]": _millimetres(self.ape_m),
             f"RPE per {self.rpe_delta_m:g} m [mm]": rpe if self.rpe_m is None else _millimetres(self.rpe_m),
-            "relative error": "none" if relative is None else f"{relative:.3f} % (RPE mean / {self.rpe_delta_m:g} m)",
+            "drift per metre": "none" if drift is None else f"{drift:.3f} % (RPE mean / {self.rpe_delta_m:g} m)",
             "final position error": f"{final.position_m * 1e3:.1f} mm = {final.percent:.3f} % of the distance",
             "heading (yaw) error": (
                 f"rmse {self.heading_rmse_deg:.3f} deg, final {np.degrees(final.heading_rad):+.3f} deg"
@@ -389,16 +397,6 @@ def evaluate(
     )
 
 
-def table2_metrics(
-    estimate: Trajectory | PoseTrajectory3D,
-    truth: Trajectory | PoseTrajectory3D,
-    max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
-) -> dict[str, float | None]:
-    """The second paper's Table 2 for one run, after placing the estimate's first pose on the truth's: positioning
-    RMSE (m), heading RMSE (deg), final error (mm and % of the distance) and relative error (% per 1 m of RPE)."""
-    return evaluate(estimate, truth, Alignment.ORIGIN, RPE_DELTA_M, max_difference_s).table2()
-
-
 TABLE3_DELTA_M = 1.0  # the segment length of the first paper's Table 3 as read here: metres travelled by the truth
 
 
@@ -408,10 +406,11 @@ def relative_translation_errors(
     delta_m: float = TABLE3_DELTA_M,
     max_difference_s: float = MAX_STAMP_DIFFERENCE_S,
 ) -> np.ndarray:
-    """The first paper's "relative translation error" (its Table 3 lists their minimum, maximum and average), metres:
-    evo's RPE, translation part, over every pair of poses ``delta_m`` of the truth's travel apart. The paper names
-    the measure and its evaluation toolbox but no segment length; 1 m is this suite's reading. Raises ValueError as
-    ``associate`` does, and when the truth travels less than ``delta_m``."""
+    """The first paper's "relative translation error", metres, one per pair of poses: evo's RPE, translation part,
+    over every pair ``delta_m`` of the truth's travel apart. (The paper compares GPO with the median and the mean
+    vector by this error's minimum, maximum and average on each short test, its Table 3; it names the measure and its
+    evaluation toolbox but no segment length, and 1 m is this suite's reading.) Raises ValueError as ``associate``
+    does, and when the truth travels less than ``delta_m``."""
     estimated, reference = associate(estimate, truth, max_difference_s)
     rpe = metrics.RPE(
         metrics.PoseRelation.translation_part, delta_m, metrics.Unit.meters, all_pairs=True, pairs_from_reference=True
@@ -421,6 +420,8 @@ def relative_translation_errors(
     except filters.FilterException as error:
         raise ValueError(f"no pair of poses {delta_m} m of travel apart: {error}") from error
     return np.asarray(rpe.error, dtype=float)
+
+
 @dataclass(frozen=True)
 class PaperTable2:
     """One row of the second paper's Table 2 under its own definitions (its §4.3), every column it prints.
@@ -439,7 +440,7 @@ class PaperTable2:
     where the ground truth was the run's end alone (its VI, VIII, IX) it prints the relative error equal to the
     final error in %, which this gives (one segment, d = D), and where it was each stage step (IV, V, VII) the
     error per step is a few per cent of a step of 5-12 mm. It depends on the segments, hence ``samples``; the
-    suite's own drift measure (RPE per metre travelled, ``Evaluation.relative_error_percent``) is another number.
+    suite's own drift measure (RPE per metre travelled, ``Evaluation.drift_percent_per_m``) is another number.
     Segments over which base_link does not move (a turn on the spot) are left out."""
 
     distance_m: float

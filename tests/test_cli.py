@@ -1,5 +1,6 @@
 """The command line: ``python -m gpo demo`` writes what it says it writes."""
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -66,6 +67,10 @@ def test_evaluate_prints_the_table_and_plots_two_tum_files(tmp_path):
     assert "alignment               origin" in result.stdout and "poses associated        101" in result.stdout
     assert f"final position error    {final_mm:.1f} mm" in result.stdout
     assert "RPE per 1 m [mm]" in result.stdout and f"wrote {plot}" in result.stdout
+    # the suite's drift, by its name: 2 % of each segment's chord; a segment ends at the first pose past 1 m of travel,
+    # at most 0.12 m past it (1.17 m/s at most, poses 0.1 s apart), and its chord is at most its arc: 2-2.4 %
+    drift = float(re.search(r"drift per metre +([0-9.]+) % \(RPE mean / 1 m\)", result.stdout).group(1))
+    assert 1.9 <= drift <= 2.4
     assert plot.read_bytes().startswith(b"\x89PNG")
 
 

@@ -18,10 +18,9 @@ from gpo.metrics import (
     associate,
     evaluate,
     final_error,
+    paper_table2,
     place_on_truth,
-    table2_metrics,
     to_evo,
-    translation_error,
     truth_poses,
 )
 
@@ -138,13 +137,17 @@ def test_a_scale_error_gives_its_final_error_percent():
     assert evaluation.final.position_m == pytest.approx(0.3, abs=1e-12)
     assert evaluation.final.percent == pytest.approx(3.0, abs=1e-10)
     assert evaluation.rpe_m.max == pytest.approx(0.03, abs=1e-12) and evaluation.rpe_m.mean == pytest.approx(0.03)
-    assert evaluation.relative_error_percent == pytest.approx(3.0, abs=1e-10)
+    assert evaluation.drift_percent_per_m == pytest.approx(3.0, abs=1e-10)
     assert evaluation.ape_m.max == pytest.approx(0.3, abs=1e-12)
-    assert translation_error(estimate, truth) == pytest.approx(0.3, abs=1e-12)
-    table2 = table2_metrics(estimate, truth)
-    assert table2["final_error_mm"] == pytest.approx(300.0) and table2["final_error_percent"] == pytest.approx(3.0)
-    assert table2["positioning_rmse_m"] == pytest.approx(0.03 * np.sqrt(np.mean(x**2)), abs=1e-12)
-    assert table2["relative_error_percent"] == pytest.approx(3.0) and table2["heading_rmse_deg"] == 0.0
+    assert final_error(estimate, truth).position_m == pytest.approx(0.3, abs=1e-12)  # the first paper's Table 4
+    measures = evaluation.measures()
+    assert measures["final_error_mm"] == pytest.approx(300.0) and measures["final_error_percent"] == pytest.approx(3.0)
+    assert measures["ape_rmse_m"] == pytest.approx(0.03 * np.sqrt(np.mean(x**2)), abs=1e-12)
+    assert measures["drift_percent_per_m"] == pytest.approx(3.0) and measures["heading_rmse_deg"] == 0.0
+    # with a truth at every pose, the second paper's positioning RMSE and final error are the same numbers
+    paper = paper_table2(estimate, truth)
+    assert paper.positioning_rmse_mm == pytest.approx(1e3 * measures["ape_rmse_m"], abs=1e-9)
+    assert paper.final_error_mm == pytest.approx(measures["final_error_mm"], abs=1e-9)
 
 
 def test_a_straight_path_aligns_in_the_plane_but_not_in_space():

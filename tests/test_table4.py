@@ -81,13 +81,13 @@ def test_the_floor_rows_final_error_by_hand(sample, table):
     assert final.distance_m == pytest.approx(distance, abs=1e-9)
     assert final.percent == pytest.approx(100 * final.position_m / distance, abs=1e-9)
     assert final.heading_rad == pytest.approx(np.angle(np.exp(1j * (yaw[-1] + turn - true_yaw[-1]))), abs=1e-9)
-    mean = np.linalg.norm(placed - true_positions[:, :2], axis=1).mean()  # the paper's mean localization error
-    assert table.mean_errors_m()[1, 0] == pytest.approx(mean, abs=1e-9)
-    assert f"{mean:9.3f}{mean:9.3f}{final.position_m:13.3f}" in table.format_mean().splitlines()[2]
+    mean = np.linalg.norm(placed - true_positions[:, :2], axis=1).mean()  # the suite's APE mean along the path
+    assert table.ape_means_m()[1, 0] == pytest.approx(mean, abs=1e-9)
+    assert f"{mean:9.3f}{mean:9.3f}{final.position_m:25.3f}" in table.format_ape_mean().splitlines()[2]
 
 
 def test_the_text_names_every_row_and_path_with_its_numbers(table):
-    text, averaged = table.format(), table.format_table2()
+    text, averaged = table.format(), table.format_measures()
     distance = table.evaluations[CAMERA]["sample"].final.distance_m
     assert f"sample ({distance:.1f} m)" in text.splitlines()[0] and "mean" in text.splitlines()[0]
     assert "mean over sample" in averaged.splitlines()[0]
@@ -179,3 +179,26 @@ def test_the_papers_table4_is_every_row_and_test_it_prints():
     assert "Test4 (12.8 m)" in header and "Test6 (17.0 m)" in header
     assert [line[:38].strip() for line in lines] == [row.label for row in PAPER_TABLE4.rows]
     assert "0.1195 ( 0.81 %)" in lines[1]  # GPO on the GPI: the printed average, the mean of its tests' per cent
+
+
+def test_the_paper_rows_are_ranked_by_their_means_in_the_paper_and_here():
+    """A made-up run of the paper's five rows whose means are the paper's but for the two GPO rows, swapped: those two
+    ranks are marked as differing, the others not; each rank is that of the mean printed beside it."""
+    from gpo.experiments.table4 import Table4
+
+    means = dict(zip(PAPER_TABLE4.rows, PAPER_TABLE4.printed_means_m, strict=True))
+    gpi, ortho = Row("floor", "gpo", "gpi"), Row("floor", "gpo", "ortho-gpi")
+    means[gpi], means[ortho] = means[ortho], means[gpi]
+
+    class Final:  # what format_ranks reads of an evaluation
+        def __init__(self, metres):
+            self.final = type("FinalError", (), {"position_m": metres})()
+
+    rows = PAPER_TABLE4.rows
+    table = Table4(rows, ("a",), {row: {"a": Final(means[row])} for row in rows}, {})
+    header, *lines = table.format_ranks().splitlines()
+    assert "the paper" in header and "here" in header
+    differing = {line[:38].strip() for line in lines if line.endswith("rank differs")}
+    assert differing == {gpi.label, ortho.label}
+    paper_ranks = [int(line[38:44]) for line in lines]
+    assert paper_ranks == [5, 4, 3, 2, 1]  # the paper: T265 worst, then GPO on the GPI, ..., the EKF on the ortho-GPI

@@ -161,7 +161,7 @@ def execute(run_: Run, config: OdometryConfig, key: str) -> Outcome:
         "final_heading_deg": math.degrees(final.heading_rad),
         "ape_rmse_m": evaluation.ape_m.rmse,
         "rpe_mean_m": None if evaluation.rpe_m is None else evaluation.rpe_m.mean,
-        "relative_error_percent": evaluation.relative_error_percent,
+        "drift_percent_per_m": evaluation.drift_percent_per_m,
         "heading_rmse_deg": evaluation.heading_rmse_deg,
         **{name: summary[name] for name in ("frames", "frames_measured", "frames_coasted", "frames_held")},
         "frames_skipped": summary["frames_skipped"],

@@ -33,8 +33,9 @@ Table columns: ``key``, ``recording`` (a label), ``recording_path``, ``recording
 config file, or ``default``), ``param.<dotted key>`` for each override, ``method``, ``status`` (ok, partial:
 reading stopped early, failed), ``error``; the metrics ``distance_m`` (travelled by the truth), ``final_error_m``,
 ``final_error_percent``, ``final_heading_deg``, ``ape_rmse_m``, ``rpe_mean_m`` (per ``RPE_DELTA_M`` metre),
-``relative_error_percent``, ``heading_rmse_deg``; the frames ``frames``, ``frames_measured``, ``frames_coasted``,
-``frames_held``, ``frames_skipped``, ``flags`` (JSON: count of flagged frames by reason), ``frames_slower_layer``
+``drift_percent_per_m`` (``gpo.metrics.Evaluation.drift_percent_per_m``), ``heading_rmse_deg``; the frames
+``frames``, ``frames_measured``, ``frames_coasted``, ``frames_held``, ``frames_skipped``, ``flags`` (JSON: count of
+flagged frames by reason), ``frames_slower_layer``
 (measured frames whose flow held a slower layer, ``gpo.motion.klt``), ``frames_overview`` (measured by the whole-view
 check, ``gpo.motion.overview``); ``frames_per_second``,
 ``seconds`` (the odometry's wall time), ``run_seconds`` (the whole run's on its worker: reading the truth, the

@@ -8,7 +8,7 @@ import dataclasses
 import matplotlib.pyplot as plt
 import numpy as np
 
-from gpo.experiments.runs import floor_run
+from gpo.experiments.runs import ROUTE_NAMES, floor_run
 from gpo.io.bag import Recording
 from gpo.metrics import FinalError, final_error
 from gpo.motion.klt import FloorFlow, FlowFrame
@@ -51,7 +51,8 @@ def whole_view_text(errors: dict[tuple[str, bool], FinalError]) -> str:
         cells = [f"{errors[method, c].percent:7.2f} % {np.degrees(errors[method, c].heading_rad):+7.1f} deg"
                  for c in (False, True)]
         lines.append(f"{method:10s} {cells[0]:>22s} {cells[1]:>22s}")
-    lines.append("final position error in % of the distance, final heading error")
+    lines.append(f"final position error in % of the distance, final heading error; on the shipped route's floor image "
+                 f"({ROUTE_NAMES[load_config().route]})")
     return "\n".join(lines)
 
 
@@ -147,7 +148,8 @@ def two_layers_text(frame: TwoLayers) -> str:
     def cell(v):
         return f"({v[0]:+.2f}, {v[1]:+.2f}) px"
     return "\n".join([
-        f"frame {frame.index}: {frame.on_floor.sum()} of {len(frame.on_floor)} tracks on the floor, "
+        f"frame {frame.index} ({ROUTE_NAMES[load_config().route]} floor image): {frame.on_floor.sum()} of "
+        f"{len(frame.on_floor)} tracks on the floor, "
         f"{(~frame.on_floor).sum()} on the reflections; floor_layer keeps {frame.kept.sum()} as the floor's",
         f"the tracks' median {cell(frame.median)}, the whole view's shift {cell(frame.overview)}, "
         f"the truth {cell(frame.truth)}",

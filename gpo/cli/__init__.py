@@ -12,7 +12,8 @@ python -m gpo run BAG --config RIG.yaml --out traj.tum [--method METHOD] [--topi
 python -m gpo run BAG ...   without --config: the config proposed from what the bag holds (as gpo config)
 python -m gpo run BAG ... --write-bag OUT.bag    also a copy of the bag with the estimate as nav_msgs/Odometry
 python -m gpo evaluate EST.tum GT [--gt-topic T] [--align none|origin|se2|se3|posyaw] [--plot OUT.png]
-python -m gpo table4 [PATH ...]   the first paper's Table 4 (and the second's Table 2 metrics) on long1-3
+python -m gpo table3 [--route ROUTE]   the first paper's Table 3 on short1-3, on the ortho-GPI, the paper's beside
+python -m gpo table4 [PATH ...]   the first paper's Table 4 on long1-3, the paper's beside, the suite's measures
 python -m gpo table2 [EXPERIMENT ...]   the second paper's Table 2 over its experiments (and chapter 08's floors)
 python -m gpo sweep SPEC.yaml --out DIR [--scheduler tcp://HOST:PORT] [--workers N]   many runs on Dask (gpo.batch)
 python -m gpo sweep-report DIR    PNG plots of a sweep's errors against each parameter, per recording and overall
@@ -45,12 +46,13 @@ from gpo.cli import (
     sweep,
     sweep_report,
     table2,
+    table3,
     table4,
 )
 from gpo.cli.common import EXIT_CODES, INTERRUPTED
 
-COMMANDS = (demo, simulate, info, sample_data, recording, calibrate, mount, config, run, table4, table2, evaluate,
-            sweep, sweep_report)
+COMMANDS = (demo, simulate, info, sample_data, recording, calibrate, mount, config, run, table3, table4, table2,
+            evaluate, sweep, sweep_report)
 """Every command's module, in the order ``--help`` lists them."""
 
 

@@ -29,6 +29,10 @@ RUN_MODULES = ("gpo.pipeline.run", "gpo.sim.record")
 """What a kept floor run goes through (the odometry, and the simulator that drew the floor board's image): a change in
 any module they import makes the kept runs stale (``gpo.io.fingerprint.sources``)."""
 
+ROUTE_NAMES = {"gpi": "GPI", "ortho-gpi": "ortho-GPI", "analytic": "analytic"}
+"""Each route's floor image as the book names it: the plain ground plane image and the ortho-rectified one, both
+calibrated on a floor board (chapters 03-04), and the analytic table from the calibration and the mount alone."""
+
 
 def drifted_tracking(path: str, drift: TrackingDrift, seed: int) -> Trajectory:
     """The fisheye rig's tracking camera along the named ``path`` with ``drift`` seeded by ``seed``, stamped as the

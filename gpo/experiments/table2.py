@@ -231,7 +231,7 @@ def table2_rows(chosen: Experiment, configs: dict[str, OdometryConfig], cache: b
         name: Table2Row(
             chosen,
             paper_table2(run.trajectory, run.truth, samples),
-            evaluate(run.trajectory, run.truth).relative_error_percent,
+            evaluate(run.trajectory, run.truth).drift_percent_per_m,
             run.frames,
             run.frames_per_second,
         )

@@ -1,19 +1,24 @@
-"""The first paper's Table 4 on the simulated 12-17 m paths, and the second paper's Table 2 metrics of the same runs.
+"""The first paper's Table 4 on the simulated 12-17 m paths, its own numbers beside, and the suite's measures of the
+same runs.
 
 Rows (``ROWS``): the tracking camera's own odometry; GPO (the paper's bicycle model on the median vector) on the
 plain GPI and on the ortho-rectified GPI; the EKF of GPO and the tracking camera on each; and beside the paper's
 method, the exact arc (``gpo-exact``) and the rigid fit (``gpo-rigid``) on both images, the EKF of each on the
 ortho-GPI, and the second paper's floor feature odometer (``features``) on the ortho-GPI.
 Columns: the paths ``long1``-``long3`` (``PATHS``: a loop, S-curves with a U-turn, stop-and-go; 15.3-16.0 m) and
-their mean. The first paper's number is its "translation error": the final position error after placing the first
-pose on the truth (``gpo.metrics.translation_error``). The headline of its introduction, 0.058 m of "mean localization
-error" for the EKF, is that error averaged over its three tests (its Table 4: 0.0579 m); ``Table4.format_mean`` prints
-beside it the other reading of the words, the mean position error along each path.
+their mean. The headline is the first paper's measure, its "translation error", read as the final position error
+after placing the first pose on the truth (``gpo.metrics.final_error``, its ``position_m``). The headline of its
+introduction, 0.058 m of "mean localization error" for the EKF, is that error averaged over its three tests (its
+Table 4: 0.0579 m). Beside it (``Table4.format_measures``, ``Table4.format_ape_mean``) the suite's measures: the APE
+along the path, the heading RMSE, the drift per metre.
+
+The paper's table is ``PAPER_TABLE4``, every row and test as printed; ``Table4.format_ranks`` ranks its five rows
+by their mean in the paper and here.
 
 Both chessboard routes are calibrated on one frame of ``FLOOR_BOARDS["t265"]``
-(``gpo.experiments.runs.route_config``), as
-chapter 04 does. Each floor run is kept on disk (``gpo.experiments.runs.floor_run``), so that ``python -m gpo table4``
-computes them once and chapter 09 reads them back. The EKF runs on the kept floor run.
+(``gpo.experiments.runs.route_config``), as chapter 04 does. Each floor run is kept on disk
+(``gpo.experiments.runs.floor_run``), so that ``python -m gpo table4`` computes them once and chapter 09 reads them
+back. The EKF runs on the kept floor run.
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gpo.experiments.runs import floor_run, route_config
+from gpo.experiments.runs import ROUTE_NAMES, floor_run, route_config
 from gpo.fusion import fuse
 from gpo.io.bag import Recording
 from gpo.metrics import Evaluation, evaluate
@@ -31,7 +36,6 @@ from gpo.pipeline.run import tracking_path
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
 PATHS = ("long1", "long2", "long3")
-ROUTE_NAMES = {"gpi": "GPI", "ortho-gpi": "ortho-GPI", "analytic": "analytic"}
 
 
 @dataclass(frozen=True)
@@ -83,20 +87,20 @@ class Table4:
         """(rows, paths) the first paper's translation error, metres."""
         return np.array([[self.evaluations[row][path].final.position_m for path in self.paths] for row in self.rows])
 
-    def mean_errors_m(self) -> np.ndarray:
-        """(rows, paths) the mean localization error along each path: the mean position error over the path (the
-        APE's mean) after placing the first pose on the truth, metres. (The first paper's 0.058 m is its Table 4's
-        average translation error; this is the other reading of its words.)"""
+    def ape_means_m(self) -> np.ndarray:
+        """(rows, paths) the suite's mean position error along each path: the APE's mean after placing the first pose
+        on the truth, metres. (Not the first paper's "mean localization error", which is its translation error
+        averaged over its tests; this is the other reading of the words.)"""
         return np.array([[float(self.evaluations[row][path].ape_m.mean) for path in self.paths] for row in self.rows])
 
-    def format_mean(self) -> str:
-        """The mean localization error per path and averaged, with the final (translation) error's mean beside it."""
-        means, finals = self.mean_errors_m(), self.translation_errors_m()
-        header = f"{'mean localization error [m]':<38}" + "".join(f"{path:>9}" for path in self.paths)
-        lines = [header + f"{'mean':>9}{'final, mean':>13}"]
+    def format_ape_mean(self) -> str:
+        """The mean position error along each path and averaged, the translation error's mean beside it."""
+        means, finals = self.ape_means_m(), self.translation_errors_m()
+        header = f"{'APE mean along the path [m]':<38}" + "".join(f"{path:>9}" for path in self.paths)
+        lines = [header + f"{'mean':>9}{'translation error, mean':>25}"]
         for row, values, final in zip(self.rows, means, finals, strict=True):
             cells = "".join(f"{value:9.3f}" for value in values)
-            lines.append(f"{row.label:<38}{cells}{values.mean():9.3f}{final.mean():13.3f}")
+            lines.append(f"{row.label:<38}{cells}{values.mean():9.3f}{final.mean():25.3f}")
         return "\n".join(lines)
 
     def percent(self) -> np.ndarray:
@@ -110,21 +114,35 @@ class Table4:
         means = [(metres.mean(), share.mean()) for metres, share in zip(errors, percent, strict=True)]
         return format_translation_errors(self.rows, self.paths, distances, errors, percent, means)
 
-    def format_table2(self) -> str:
-        """The second paper's Table 2 metrics of every row, averaged over the paths."""
-        names = ("positioning_rmse_m", "heading_rmse_deg", "final_error_mm", "final_error_percent")
-        names += ("relative_error_percent",)
-        header = f"{'mean over ' + ', '.join(self.paths):<38}{'pos. RMSE':>11}{'head. RMSE':>12}"
-        header += f"{'final':>10}{'final':>9}{'relative':>10}"
-        units = f"{'':<38}{'[m]':>11}{'[deg]':>12}{'[mm]':>10}{'[%]':>9}{'[%]':>10}"
+    def format_ranks(self) -> str:
+        """The paper's rows ranked by their mean translation error (1 the smallest) in the paper and here, with the
+        means; a row whose rank differs is marked."""
+        paper = dict(zip(PAPER_TABLE4.rows, PAPER_TABLE4.printed_means_m, strict=True))
+        ours = dict(zip(self.rows, self.translation_errors_m().mean(axis=1), strict=True))
+        rows = [row for row in PAPER_TABLE4.rows if row in ours]
+        rank = {name: {row: k for k, row in enumerate(sorted(rows, key=means.get), 1)}
+                for name, means in (("paper", paper), ("here", ours))}
+        lines = [f"{'rank by mean translation error [m]':<38}{'the paper':>16}{'here':>16}"]
+        for row in rows:
+            mark = "" if rank["paper"][row] == rank["here"][row] else "   rank differs"
+            lines.append(f"{row.label:<38}{rank['paper'][row]:>6d} ({paper[row]:.4f}){rank['here'][row]:>6d} "
+                         f"({ours[row]:.4f}){mark}")
+        return "\n".join(lines)
+
+    def format_measures(self) -> str:
+        """The suite's measures of every row (``gpo.metrics.Evaluation.measures``), averaged over the paths."""
+        names = ("ape_rmse_m", "heading_rmse_deg", "final_error_mm", "final_error_percent", "drift_percent_per_m")
+        header = f"{'mean over ' + ', '.join(self.paths):<38}{'APE RMSE':>11}{'head. RMSE':>12}"
+        header += f"{'final':>10}{'final':>9}{'drift':>10}"
+        units = f"{'':<38}{'[m]':>11}{'[deg]':>12}{'[mm]':>10}{'[%]':>9}{'[%/m]':>10}"
         lines = [header, units]
         for row in self.rows:
-            metrics = [self.evaluations[row][path].table2() for path in self.paths]
-            mean = {name: float(np.mean([m[name] for m in metrics])) for name in names}
+            measures = [self.evaluations[row][path].measures() for path in self.paths]
+            mean = {name: float(np.mean([m[name] for m in measures])) for name in names}
             lines.append(
-                f"{row.label:<38}{mean['positioning_rmse_m']:>11.3f}{mean['heading_rmse_deg']:>12.2f}"
+                f"{row.label:<38}{mean['ape_rmse_m']:>11.3f}{mean['heading_rmse_deg']:>12.2f}"
                 f"{mean['final_error_mm']:>10.1f}{mean['final_error_percent']:>9.3f}"
-                f"{mean['relative_error_percent']:>10.3f}"
+                f"{mean['drift_percent_per_m']:>10.3f}"
             )
         return "\n".join(lines)
 

@@ -1,0 +1,20 @@
+"""``python -m gpo table3``: the first paper's Table 3 on the simulated short paths (``gpo.experiments.table3``), on
+the paper's floor image (the ortho-GPI from a floor board) unless another route is named, each cell beside the
+paper's."""
+
+from __future__ import annotations
+
+NAME = "table3"
+HELP = "the first paper's Table 3 (median against mean vector) on the simulated short paths, the paper's beside"
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--route", default="ortho-gpi", choices=("ortho-gpi", "gpi", "analytic"),
+                        help="the floor image (default: ortho-gpi, the paper's)")
+
+
+def run(args) -> int:
+    from gpo.experiments.table3 import reproduce_table3
+
+    print(reproduce_table3(args.route).format())
+    return 0
