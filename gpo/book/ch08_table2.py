@@ -90,6 +90,26 @@ def print_ablation(saved: list[dict], numbers=ABLATED) -> None:
     ))  # fmt: skip
 
 
+def draw_ablation(saved: list[dict], numbers=ABLATED, ax=None):
+    """The final error (% of the distance, log scale) of each step of the ablation, one line per experiment of
+    ``numbers``, each with the paper's own final error dotted in its colour."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(11, 4.2))
+    steps = list(dict.fromkeys(row["pipeline"] for row in saved if row["experiment"] == numbers[0]))
+    for number in numbers:
+        values = [_find(saved, step, number)["final_error_percent"] for step in steps]
+        (line,) = ax.plot(range(len(steps)), values, marker="o", label=number)
+        ax.axhline(experiment(number).paper.final_error_percent, color=line.get_color(), ls=":", lw=1)
+    ax.set_xticks(range(len(steps)), steps, rotation=20, ha="right")
+    ax.set_yscale("log")
+    ax.set_ylabel("final error [% of distance]")
+    ax.set_title("from the paper's method to the shipped pipeline (dotted: the paper's own final errors)")
+    ax.legend(title="experiment")
+    return ax
+
+
 def print_targets(saved: list[dict]) -> None:
     """The targets, each met or missed with its number: the shipped pipeline's final error on I-III and IX, its
     heading RMSE on I-II against the paper's, IV-VIII's final errors against the paper's; as published, I-III's
