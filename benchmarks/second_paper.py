@@ -42,10 +42,6 @@ def main() -> None:
     print_ablation(saved, [number for number in ABLATED if number in args.experiments])
     print()
     print_targets(saved)
-    print(f"\n{'':8}{'frames/s':>10} per step: " + ", ".join(
-        f"{row['pipeline']} {row['experiment']} {row['frames_per_second']}" for row in saved
-        if row["pipeline"] in ("as published", "shipped")
-    ))  # fmt: skip
     if args.write:
         print(f"wrote {write_json(args.write, saved)}")
 
