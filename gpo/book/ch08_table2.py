@@ -75,17 +75,17 @@ def print_ablation(saved: list[dict], numbers=ABLATED) -> None:
     on each of the experiments ``numbers``: the final error (mm) and the heading RMSE (degrees, against every
     frame's truth), then the paper's (its heading RMSE where it printed one)."""
     steps = list(dict.fromkeys(row["pipeline"] for row in saved if row["experiment"] == numbers[0]))
-    print(f"{'':20}" + "".join(f"{number:>17}" for number in numbers))
-    print(f"{'':20}" + f"{'final[mm]':>11}{'head.[°]':>6}" * len(numbers))
+    print(f"{'':20}" + "".join(f"{number:>19}" for number in numbers))
+    print(f"{'':20}" + f"{'final[mm]':>10}{'head.[°]':>9}" * len(numbers))
     for step in steps:
         cells = []
         for number in numbers:
             row = _find(saved, step, number)
-            cells.append(f"{row['final_error_mm']:11.1f}{row['continuous_heading_rmse_deg']:6.2f}")
+            cells.append(f"{row['final_error_mm']:10.1f}{row['continuous_heading_rmse_deg']:9.2f}")
         print(f"{step:20}" + "".join(cells))
     paper = [experiment(number).paper for number in numbers]
     print(f"{'the paper':20}" + "".join(
-        f"{p.final_error_mm:11.1f}" + (f"{'-':>6}" if math.isnan(p.heading_rmse_deg) else f"{p.heading_rmse_deg:6.2f}")
+        f"{p.final_error_mm:10.1f}" + (f"{'-':>9}" if math.isnan(p.heading_rmse_deg) else f"{p.heading_rmse_deg:9.2f}")
         for p in paper
     ))  # fmt: skip
 
