@@ -19,6 +19,8 @@ import argparse
 import dataclasses
 import math
 
+import matplotlib.pyplot as plt
+
 from gpo.experiments.table2 import EXPERIMENTS, HEADER, ablation_configs, experiment, format_row, reproduce_table2
 from gpo.metrics import PaperTable2
 
@@ -73,7 +75,9 @@ def print_table2(saved: list[dict], pipelines=("as published", "shipped")) -> No
 def print_ablation(saved: list[dict], numbers=ABLATED) -> None:
     """Each step from the paper's method to the shipped pipeline (one row each, the suite's changes added in turn)
     on each of the experiments ``numbers``: the final error (mm) and the heading RMSE (degrees, against every
-    frame's truth), then the paper's (its heading RMSE where it printed one)."""
+    frame's truth), then the paper's (its heading RMSE where it printed one); experiments ``saved`` lacks are left
+    out."""
+    numbers = [number for number in numbers if _find(saved, "shipped", number)]
     steps = list(dict.fromkeys(row["pipeline"] for row in saved if row["experiment"] == numbers[0]))
     print(f"{'':20}" + "".join(f"{number:>19}" for number in numbers))
     print(f"{'':20}" + f"{'final[mm]':>10}{'head.[°]':>9}" * len(numbers))
@@ -92,8 +96,8 @@ def print_ablation(saved: list[dict], numbers=ABLATED) -> None:
 
 def draw_ablation(saved: list[dict], numbers=ABLATED, ax=None):
     """The final error (% of the distance, log scale) of each step of the ablation, one line per experiment of
-    ``numbers``, each with the paper's own final error dotted in its colour."""
-    import matplotlib.pyplot as plt
+    ``numbers`` that ``saved`` holds, each with the paper's own final error dotted in its colour."""
+    numbers = [number for number in numbers if _find(saved, "shipped", number)]
 
     if ax is None:
         _, ax = plt.subplots(figsize=(11, 4.2))
