@@ -183,5 +183,5 @@ def test_experiment_iv_measures_its_steps_to_a_fraction_of_a_millimetre():
 def test_unknown_experiments_are_named():
     from gpo.experiments.table2 import experiment
 
-    with pytest.raises(ValueError, match="the experiments are I, II, IV"):
-        experiment("III")
+    with pytest.raises(ValueError, match="the experiments are I, II, III, IV"):
+        experiment("X")

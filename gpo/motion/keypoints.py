@@ -104,6 +104,8 @@ class FeatureParameters:
     partitions of the matches into loops). ``min_matches``: fewer matches left after the filters flag the frame.
     ``refit_px``: for the caller (``refit``), the fit is repeated on every match the first fit moves to within this
     many pixels of its partner (0: the paper's fit alone). ``seed``: the invariance check's random generator.
+    The suite's rules beside the paper's (``histogram_filter``, ``invariance_check``; each off gives the paper's):
+    ``circular_binning``, ``band_floor_px`` (0: plain mu +- sigma) and ``short_side_px`` (0: every side judged).
     """
 
     detector: str = "orb"
@@ -124,6 +126,9 @@ class FeatureParameters:
     min_matches: int = 6
     refit_px: float = 1.5
     seed: int = 0
+    circular_binning: bool = True
+    band_floor_px: float = LOCALISATION_PX
+    short_side_px: float = SHORT_SIDE_PX
 
     def __post_init__(self):
         if isinstance(self.roi, list):  # as YAML gives it
@@ -140,7 +145,7 @@ class FeatureParameters:
             and min(roi[2:]) >= MIN_ROI_PX
         )
         cardinality_ok, cardinality = in_range(self.cardinality, 3, 10_000, " matches per loop", whole=True)
-        flags = ("cross_check", "histogram_filter", "invariance_check")
+        flags = ("cross_check", "histogram_filter", "invariance_check", "circular_binning")
         return {
             "detector": (self.detector in DETECTORS, f"one of {', '.join(map(repr, DETECTORS))}"),
             "max_features": in_range(self.max_features, 1, 100_000, " keypoints", whole=True),
@@ -161,6 +166,8 @@ class FeatureParameters:
             "min_matches": in_range(self.min_matches, 2, 100_000, " matches", whole=True),
             "refit_px": in_range(self.refit_px, 0, 100, " px (0: no refit)"),
             "seed": (_whole(self.seed, 0), "a whole number >= 0"),
+            "band_floor_px": in_range(self.band_floor_px, 0, 100, " px (0: plain mu +- sigma)"),
+            "short_side_px": in_range(self.short_side_px, 0, 100, " px (0: every side judged)"),
         }
 
 
@@ -327,12 +334,14 @@ class HistogramStage:
 
 
 def histogram_filter(
-    start, end, orientation_bins: int = 180, length_bins: int = 160
+    start, end, orientation_bins: int = 180, length_bins: int = 160, circular: bool = True,
+    band_floor_px: float = LOCALISATION_PX,
 ) -> tuple[np.ndarray, HistogramStage, HistogramStage | None]:
     """The paper's histogram filter on the match vectors d = ``end`` - ``start`` ((N, 2) each, pixels).
 
     Returns the mask of kept matches (N,), the orientation stage and the length stage (None when the first kept
-    nothing). The rules:
+    nothing). ``circular`` False bins as the paper does: the joining line's orientation, atan2(d_v, d_u) modulo 180
+    degrees, every vector in ``orientation_bins`` bins over 0-180 degrees. With ``circular`` (the suite's rules):
 
     - mu and sigma are those of the histogram: the mean and standard deviation of the bin centres weighted by the
       counts, i.e. of the binned values (each value counts as its bin's centre, at most half a bin away).
@@ -345,36 +354,36 @@ def histogram_filter(
       judges it. So a still frame (every vector about 0) passes, and keeps its matches.
     - The lengths kept by the first stage are binned in ``length_bins`` bins from the least to the greatest (or
       to ``LOCALISATION_PX`` above the least, if they lie closer together).
-    - Each band is mu +- sigma, but never narrower than ``LOCALISATION_PX`` of motion: +-0.5 px in length and the
-      angle 0.5 px makes at the vectors' median length in orientation. Vectors that differ by less than the
-      keypoints' localisation are not told apart; in particular all equal vectors (sigma = 0) are all kept.
+    - Each band is mu +- sigma, but never narrower than ``band_floor_px`` (``LOCALISATION_PX``) of motion: +-0.5 px
+      in length and the angle 0.5 px makes at the vectors' median length in orientation. Vectors that differ by less
+      than the keypoints' localisation are not told apart; in particular all equal vectors (sigma = 0) are all kept.
     """
     vectors = np.asarray(end, dtype=float) - np.asarray(start, dtype=float)
     lengths = np.hypot(vectors[:, 0], vectors[:, 1])
-    orientation = _orientation_stage(vectors, lengths, orientation_bins)
+    orientation = _orientation_stage(vectors, lengths, orientation_bins, circular, band_floor_px)
     if not orientation.kept.any():
         return orientation.kept, orientation, None
-    length = _length_stage(lengths, orientation.kept, length_bins)
+    length = _length_stage(lengths, orientation.kept, length_bins, band_floor_px)
     return length.kept, orientation, length
 
 
-def _orientation_stage(vectors: np.ndarray, lengths: np.ndarray, bins: int) -> HistogramStage:
+def _orientation_stage(vectors, lengths, bins: int, circular: bool, band_floor_px: float) -> HistogramStage:
     angles = np.degrees(np.arctan2(vectors[:, 1], vectors[:, 0]))
-    judged = lengths >= SHORT_VECTOR_PX
-    centre = _circular_mean_deg(angles[judged])
-    values = centre + (angles - centre + 180.0) % 360.0 - 180.0  # within 180 degrees of the centre
+    judged = lengths >= SHORT_VECTOR_PX if circular else np.ones(len(lengths), bool)
+    centre = _circular_mean_deg(angles[judged]) if circular else 90.0
+    values = centre + (angles - centre + 180.0) % 360.0 - 180.0 if circular else angles % 180.0
     counts, edges = np.histogram(values[judged], bins=bins, range=(centre - 90.0, centre + 90.0))
     mean, sigma = _binned_moments(counts, edges)
-    floor = np.degrees(np.arctan2(LOCALISATION_PX, np.median(lengths[judged]))) if judged.any() else 0.0
+    floor = np.degrees(np.arctan2(band_floor_px, np.median(lengths[judged]))) if judged.any() else 0.0
     within = (np.abs(values - mean) <= max(sigma, floor)) & (np.abs(values - centre) <= 90.0)
     return HistogramStage(values, counts, edges, mean, sigma, ~judged | within)
 
 
-def _length_stage(lengths: np.ndarray, among: np.ndarray, bins: int) -> HistogramStage:
+def _length_stage(lengths: np.ndarray, among: np.ndarray, bins: int, band_floor_px: float) -> HistogramStage:
     low, high = lengths[among].min(), lengths[among].max()
     counts, edges = np.histogram(lengths[among], bins=bins, range=(low, max(high, low + LOCALISATION_PX)))
     mean, sigma = _binned_moments(counts, edges)
-    kept = among & (np.abs(lengths - mean) <= max(sigma, LOCALISATION_PX))
+    kept = among & (np.abs(lengths - mean) <= max(sigma, band_floor_px))
     return HistogramStage(lengths, counts, edges, mean, sigma, kept)
 
 
@@ -412,7 +421,8 @@ def choose_cardinality(matches: int) -> int:
 
 
 def invariance_check(
-    start, end, threshold: float = 0.85, cardinality: int | None = None, rounds: int = 3, rng=None
+    start, end, threshold: float = 0.85, cardinality: int | None = None, rounds: int = 3, rng=None,
+    short_side_px: float = SHORT_SIDE_PX,
 ) -> InvarianceCheck:
     """The paper's Algorithm 1 on matched points ``start`` and ``end`` ((N, 2) each, pixels).
 
@@ -420,10 +430,11 @@ def invariance_check(
     consecutive loops of C = ``cardinality`` (None: ``choose_cardinality``); the last, short loop is filled up with
     other matches drawn at random, so that every match is tested once a round. A loop p_1 -> ... -> p_C -> p_1 is
     kept when each side, of length l in the start frame and l^ in the end frame, has
-    min(l, l^) / max(l, l^) >= ``threshold``; a side shorter than ``SHORT_SIDE_PX`` in both frames is too short to
-    judge (a pixel of error is half of it) and passes. A match is kept when it lies in at least one kept loop.
-    With a share w of right matches, a right one is missed in all rounds with probability (1 - w^(C-1))^rounds:
-    0.7 % for w = 0.95, C = 5 and the default 3 rounds. Fewer matches than C: none is kept.
+    min(l, l^) / max(l, l^) >= ``threshold``; a side shorter than ``short_side_px`` in both frames is too short to
+    judge (a pixel of error is half of ``SHORT_SIDE_PX``) and passes (0: every side judged, as the paper has it).
+    A match is kept when it lies in at least one kept loop. With a share w of right matches, a right one is missed
+    in all rounds with probability (1 - w^(C-1))^rounds: 0.7 % for w = 0.95, C = 5 and the default 3 rounds.
+    Fewer matches than C: none is kept.
     """
     start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
     count = len(start)
@@ -432,7 +443,7 @@ def invariance_check(
     if count < size:
         return InvarianceCheck([], np.zeros(0, bool), np.zeros(count, bool), size)
     loops = np.concatenate([_partition(count, size, rng) for _ in range(rounds)])
-    kept_loops = _sides_kept(start, loops, threshold, end).all(axis=1)
+    kept_loops = _sides_kept(start, loops, threshold, end, short_side_px).all(axis=1)
     kept = np.zeros(count, bool)
     kept[loops[kept_loops].ravel()] = True
     return InvarianceCheck(list(loops), kept_loops, kept, size)
@@ -449,13 +460,13 @@ def _partition(count: int, size: int, rng: np.random.Generator) -> np.ndarray:
     return order.reshape(-1, size)
 
 
-def _sides_kept(start: np.ndarray, loops: np.ndarray, threshold: float, end: np.ndarray) -> np.ndarray:
+def _sides_kept(start, loops: np.ndarray, threshold: float, end, short_side_px: float) -> np.ndarray:
     """Whether each side (loops, C) of each loop keeps its length from ``start`` to ``end``."""
     following = np.roll(loops, -1, axis=1)
     before, after = (np.linalg.norm(points[following] - points[loops], axis=2) for points in (start, end))
     shorter, longer = np.minimum(before, after), np.maximum(before, after)
     ratio = np.divide(shorter, longer, out=np.ones_like(longer), where=longer > 0)
-    return (ratio >= threshold) | (longer < SHORT_SIDE_PX)
+    return (ratio >= threshold) | (longer < short_side_px)
 
 
 @dataclass(frozen=True, eq=False)
@@ -549,13 +560,14 @@ class FeatureTracker:
         kept, histogram, invariance = np.ones(len(pairs), bool), None, None
         flag = _too_few_to_filter(len(previous), len(current), len(pairs), p.min_matches)
         if flag is None and p.histogram_filter:
-            bins = (p.orientation_bins, p.length_bins)
+            bins = (p.orientation_bins, p.length_bins, p.circular_binning, p.band_floor_px)
             kept, *stages = _timed(seconds, "histogram", histogram_filter, start, end, *bins)
             histogram = tuple(stages)
             flag = _too_few_left(int(kept.sum()), "histogram filter", p.min_matches)
         if flag is None and p.invariance_check:
             chosen = np.flatnonzero(kept)
-            check = (start[chosen], end[chosen], p.invariance_threshold, p.cardinality, p.rounds, self._rng)
+            check = (start[chosen], end[chosen], p.invariance_threshold, p.cardinality, p.rounds, self._rng,
+                     p.short_side_px)
             invariance = _timed(seconds, "invariance", invariance_check, *check)
             kept = np.zeros(len(pairs), bool)
             kept[chosen[invariance.kept]] = True

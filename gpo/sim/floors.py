@@ -11,6 +11,11 @@ shaped into one of three floor kinds that mirror the second paper's test floors:
 - ``"industrial"`` — low texture: smooth screed with sparse faint scratches; the renderer adds
   a view-dependent reflective sheen for this kind.
 
+A kind's ``contrast`` scales its surface's departures from its mean grey level (1: the kind as described). The
+second paper's Table 1 grades the industrial floor's texture low or very low, and its text says the low one holds
+"an higher number of visual features, even if of a small margin": ``VERY_LOW_CONTRAST`` is the screed at three
+quarters of its contrast.
+
 Low-frequency stains and world-fixed lighting go on top of every kind. A mip-map pyramid of
 the texture lets the renderer anti-alias (see ``gpo.sim.render``). Everything is seeded.
 
@@ -31,6 +36,7 @@ FLOOR_KINDS = ("wood", "raised", "industrial")
 PHOTOS = ("gravel", "grass", "brick", "moon")  # scikit-image's grey photographs a floor's grain may come from
 DEFAULT_PHOTOS = PHOTOS[:2]
 MIX_EDGE_M = 0.01  # where two kinds of a mixed floor meet, one fades into the other over about this width, metres
+VERY_LOW_CONTRAST = 0.75  # the second paper's "very low" texture (its Table 1): the screed's grain and scratches at 3/4
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,19 +69,26 @@ def make_floor(
     texel: float = 1e-3,
     seed: int | Sequence[int] = 0,
     photos: Sequence[str] = DEFAULT_PHOTOS,
+    contrast: float = 1.0,
 ) -> FloorTexture:
     """A floor of ``kind`` covering ``extent`` = (x_min, x_max, y_min, y_max) metres at ``texel`` metres per texel,
-    its grain from ``photos`` (some of ``PHOTOS``); ``seed``: an integer or a sequence of them (numpy's seeding)."""
+    its grain from ``photos`` (some of ``PHOTOS``); ``seed``: an integer or a sequence of them (numpy's seeding);
+    ``contrast`` (> 0) scales the kind's surface about its mean grey level before the stains and lighting."""
     if kind not in FLOOR_KINDS:
         raise ValueError(f"unknown floor kind {kind!r}; the kinds are {', '.join(FLOOR_KINDS)}")
     _check_photos(photos)
     x_min, x_max, y_min, y_max = extent
-    if not (x_max > x_min and y_max > y_min and texel > 0):
-        raise ValueError(f"a floor needs x_max > x_min, y_max > y_min and texel > 0, got {extent} and {texel}")
+    if not (x_max > x_min and y_max > y_min and texel > 0 and contrast > 0):
+        raise ValueError(
+            f"a floor needs x_max > x_min, y_max > y_min, texel > 0 and contrast > 0, got {extent}, {texel}, {contrast}"
+        )
     shape = (int(np.ceil((y_max - y_min) / texel)), int(np.ceil((x_max - x_min) / texel)))
     rng = np.random.default_rng(seed)
     grain = _bombed_grain(shape, rng, photos)
     surface = {"wood": _wood, "raised": _raised_floor, "industrial": _industrial}[kind](grain, texel, rng)
+    if contrast != 1.0:
+        mean = np.float32(surface.mean())
+        surface = mean + np.float32(contrast) * (surface - mean)
     surface *= _low_frequency(shape, texel, cell_m=0.35, rng=rng, amplitude=0.08)  # stains
     surface *= _low_frequency(shape, texel, cell_m=2.0, rng=rng, amplitude=0.12)  # lighting
     image = np.clip(surface, 0, 255).astype(np.uint8)
@@ -89,12 +102,14 @@ class FloorDesign:
     """What a floor is made of: ``kinds`` (of ``FLOOR_KINDS``; several are mixed in patches of about ``patch_m``
     metres, each meeting the next over ``MIX_EDGE_M``) and the ``photos`` its grain comes from (of ``PHOTOS``).
     ``sheen``: None gives the floor the reflective sheen its kinds have (the industrial screed's); False or True
-    takes it off or puts it on (a matte screed, a polished wood), the texture unchanged."""
+    takes it off or puts it on (a matte screed, a polished wood), the texture unchanged. ``contrast``: each kind's
+    (``make_floor``)."""
 
     kinds: tuple[str, ...]
     photos: tuple[str, ...] = DEFAULT_PHOTOS
     patch_m: float = 1.0
     sheen: bool | None = None
+    contrast: float = 1.0
 
     def __post_init__(self):
         if not self.kinds or any(kind not in FLOOR_KINDS for kind in self.kinds):
@@ -102,6 +117,8 @@ class FloorDesign:
         _check_photos(self.photos)
         if not self.patch_m > 0:
             raise ValueError(f"patch_m must be > 0, got {self.patch_m!r}")
+        if not self.contrast > 0:
+            raise ValueError(f"contrast must be > 0, got {self.contrast!r}")
         if self.sheen not in (None, False, True):
             raise ValueError(f"sheen is None (as the kinds have it), False or True, got {self.sheen!r}")
 
@@ -110,9 +127,11 @@ class FloorDesign:
         kind as ``make_floor`` makes it, or each kind made with its own seed and blended by the weights
         softmax(f_k / (``MIX_EDGE_M`` / ``patch_m``)) of smooth random fields f_k varying over ``patch_m``."""
         if len(self.kinds) == 1:
-            floor = make_floor(self.kinds[0], extent, texel, seed, self.photos)
+            floor = make_floor(self.kinds[0], extent, texel, seed, self.photos, self.contrast)
             return floor if self.sheen is None else replace(floor, sheen=self.sheen)
-        floors = [make_floor(kind, extent, texel, [seed, k], self.photos) for k, kind in enumerate(self.kinds)]
+        floors = [
+            make_floor(kind, extent, texel, [seed, k], self.photos, self.contrast) for k, kind in enumerate(self.kinds)
+        ]
         shape = floors[0].levels[0].shape
         rng = np.random.default_rng([seed, len(self.kinds)])
         fields = np.stack([_low_frequency(shape, texel, self.patch_m, rng, 1.0) for _ in self.kinds])

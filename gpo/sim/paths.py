@@ -191,9 +191,34 @@ def path_cart_i() -> list[Segment]:
     return random_cart(17.8, 0.24, seed=1)
 
 
+CART_II_TURN_RATE_RADPS = np.radians(40.0)  # experiment II's cart turns twice as fast: see path_cart_ii
+
+
 def path_cart_ii() -> list[Segment]:
-    """Experiment II: the same, faster (the paper: 19.27 m at 0.29 m/s)."""
-    return random_cart(19.2, 0.6, seed=2)
+    """Experiment II: the same, faster and smoother (the paper: 19.27 m at 0.294 m/s, "more regular and smoother"
+    movements than I's): 19.4 m at 0.294 m/s on average. Turning at 20 deg/s, as I does, a cart whose turns take
+    most of its time averages at most about 0.23 m/s however fast it rolls; turning at up to 40 deg/s
+    (``CART_II_TURN_RATE_RADPS``) and rolling at 0.55 m/s, it averages the paper's speed."""
+    return random_cart(19.0, 0.55, seed=2, max_rate_radps=CART_II_TURN_RATE_RADPS)
+
+
+CORRIDOR_SPEED_MPS = 0.305  # experiment III's cart rolls at this along the corridor: 0.30 m/s on average, its start too
+
+
+def path_corridor_iii() -> list[Segment]:
+    """Experiment III: the three-wheeled cart pushed along a raised-floor corridor, 14.48 m at about 0.30 m/s (the
+    paper: 14.48 m at 0.302 m/s): down the corridor, drifting 0.3 m across it and back as a hand-pushed cart does, a
+    90 degree left bend into the next corridor, and on."""
+    v = CORRIDOR_SPEED_MPS
+    return [
+        Straight(3.0, v),
+        SCurve(2.5, 0.3, v),
+        Straight(2.0, v),
+        Bend(np.pi / 2, 2.0, v),
+        Straight(1.5, v),
+        SCurve(2.0, -0.3, v),
+        Straight(1.48, v),
+    ]
 
 
 def stage_steps(lengths_m) -> list[Segment]:
@@ -263,6 +288,7 @@ PATHS: dict[str, Callable[[], list[Segment]]] = {
     "downward-long": path_downward_long,
     "cart-i": path_cart_i,
     "cart-ii": path_cart_ii,
+    "corridor-iii": path_corridor_iii,
     "stage-iv": path_stage_iv,
     "stage-v": path_stage_v,
     "stage-vi": path_stage_vi,

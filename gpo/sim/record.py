@@ -46,7 +46,7 @@ from gpo.io.trajectory import Trajectory
 from gpo.sim.ceiling import DEFAULT_CEILING, Ceiling
 from gpo.sim.disturbances import Disturbances
 from gpo.sim.drift import T265_DRIFT, TrackingDrift, tracking_odometry
-from gpo.sim.floors import FloorDesign, make_floor
+from gpo.sim.floors import VERY_LOW_CONTRAST, FloorDesign, make_floor
 from gpo.sim.outages import Outage, apply_outage, outage_at
 from gpo.sim.paths import named_plan
 from gpo.sim.plans import MotionPlan
@@ -56,6 +56,9 @@ from gpo.sim.rigs import RIGS
 START_NS = 1_700_000_000 * 1_000_000_000  # 2023-11-14 22:13:20 UTC: the first stamp of every recording
 GROUND_TRUTH_TOPIC = "/mocap/base_link"
 ODOMETRY_TOPIC = "/camera/odom/sample"
+AVERAGE_REFLECTION = dataclasses.replace(DEFAULT_CEILING, reflection=DEFAULT_CEILING.reflection / 2)
+"""The room of an averagely reflective floor (the second paper's raised floor): its mirrored lamps half as bright
+as the glossy screed's."""
 TEXEL_M = {"t265": 1e-3, "downward": 5e-4}  # floor texture resolution per rig: finer than a pixel's footprint
 FLOOR_MARGIN_M = {"t265": 2.5, "downward": 0.5}  # textured floor beyond the path, metres
 
@@ -67,6 +70,8 @@ class Preset:
     ``exposure_s`` > 0 blurs each frame over that exposure (``blur_samples`` poses averaged).
     ``disturbances`` put moving sheets and glints in the camera's view (none by default).
     ``outages`` (``gpo.sim.outages.Outage``) are stretches where the floor cannot be measured (none by default).
+    ``contrast`` and ``sheen``: the floor's (``gpo.sim.floors.FloorDesign``: its texture's contrast, 1 as the kind
+    has it; None: the kind's own sheen); ``ceiling``: the room's, whose lamps a glossy floor mirrors.
     """
 
     rig: str
@@ -78,13 +83,16 @@ class Preset:
     blur_samples: int = 3
     disturbances: Disturbances = field(default_factory=Disturbances)
     outages: tuple[Outage, ...] = ()
+    contrast: float = 1.0
+    sheen: bool | None = None
+    ceiling: Ceiling = DEFAULT_CEILING
 
     def setup(self) -> Setup:
         """What this preset shows: its rig, path, floor and seed; the fisheye rig's T265 drifts as ``T265_DRIFT``."""
         return Setup(
             RIGS[self.rig](),
             named_plan(self.path),
-            FloorDesign((self.floor,)),
+            FloorDesign((self.floor,), sheen=self.sheen, contrast=self.contrast),
             self.seed,
             T265_DRIFT if self.rig == "t265" else None,
             TEXEL_M[self.rig],
@@ -93,6 +101,7 @@ class Preset:
             self.blur_samples,
             self.disturbances,
             self.outages,
+            ceiling=self.ceiling,
         )
 
 
@@ -217,20 +226,26 @@ PRESETS = {
         ) for k, kind in enumerate(("wood", "raised", "industrial"))
     },
     "downward-long": Preset("downward", "downward-long", "wood", 33, "the downward camera over a wood floor, 16.5 m"),
-    # the second paper's experiments (its Tables 1 and 2): the downward camera on a cart (I-II), on the linear and
-    # rotational stages (IV-VIII) and on the omnidirectional AGV (IX); the paper's III (raised-floor corridor,
-    # ground markers) is not among them
+    # the second paper's experiments in its conditions (its Tables 1 and 2): the downward camera on the three-wheeled
+    # cart over wood (I-II, low reflectivity, high texture) and along a raised-floor corridor (III, average both), on
+    # the linear and rotational stages over the industrial floor (IV-VIII, high reflectivity: the screed mirrors the
+    # ceiling's lamps; low texture for IV and VI, very low for V, VII and VIII) and on the omnidirectional AGV (IX)
     **{
-        f"paper2-{number}": Preset("downward", path, floor, seed, f"experiment {number.upper()}: {text}")
-        for number, path, floor, seed, text in (
-            ("i", "cart-i", "wood", 41, "a cart pushed at random over a wood floor, 18 m"),
-            ("ii", "cart-ii", "wood", 42, "the same, faster, 19.7 m"),
-            ("iv", "stage-iv", "industrial", 44, "50 steps of 10 mm on a linear stage, 0.5 m"),
-            ("v", "stage-v", "industrial", 45, "100 steps of 5-20 mm on a linear stage, 1.24 m"),
-            ("vi", "stage-vi", "industrial", 46, "along a linear stage at 0.12 m/s, 3.18 m"),
-            ("vii", "rotation-vii", "industrial", 47, "a 90 degree rotation in 1 degree steps on a 0.28 m arm"),
-            ("viii", "rotation-viii", "industrial", 48, "a 180 degree rotation at 20 deg/s on a 0.28 m arm"),
-            ("ix", "agv-ix", "industrial", 49, "the omnidirectional AGV, 81 m with sideways and diagonal moves"),
+        f"paper2-{number}": Preset("downward", path, floor, seed, f"experiment {number.upper()}: {text}", **conditions)
+        for number, path, floor, seed, text, conditions in (
+            ("i", "cart-i", "wood", 41, "a cart pushed at random over a wood floor, 18 m at 0.16 m/s", {}),
+            ("ii", "cart-ii", "wood", 42, "the same, faster, 19.4 m at 0.294 m/s", {}),
+            ("iii", "corridor-iii", "raised", 43, "a cart along a raised-floor corridor, 14.48 m at 0.30 m/s",
+             {"sheen": True, "ceiling": AVERAGE_REFLECTION}),
+            ("iv", "stage-iv", "industrial", 44, "50 steps of 10 mm on a linear stage, 0.5 m, low texture", {}),
+            ("v", "stage-v", "industrial", 45, "100 steps of 5-20 mm on a linear stage, 1.24 m, very low texture",
+             {"contrast": VERY_LOW_CONTRAST}),
+            ("vi", "stage-vi", "industrial", 46, "along a linear stage at 0.12 m/s, 3.18 m, low texture", {}),
+            ("vii", "rotation-vii", "industrial", 47, "a 90 degree rotation in 1 degree steps, very low texture",
+             {"contrast": VERY_LOW_CONTRAST}),
+            ("viii", "rotation-viii", "industrial", 48, "a 180 degree rotation at 20 deg/s, very low texture",
+             {"contrast": VERY_LOW_CONTRAST}),
+            ("ix", "agv-ix", "industrial", 49, "the omnidirectional AGV, 81 m with sideways and diagonal moves", {}),
         )
     },
 }

@@ -1,0 +1,177 @@
+"""Chapter 08's Table 2 and its road from the paper's method as published to the shipped pipeline.
+
+``python -m gpo.book.ch08_table2 [EXPERIMENTS]`` runs every step of ``gpo.experiments.table2.ablation_configs``
+over the experiments (default: ``ABLATED``, I, II, III, VIII and IX), each run kept on disk as Table 2's are, and
+prints Table 2 (as published and shipped), the ablation and the targets. The full-image SIFT of the published method
+takes a fifth of a second a frame on the wood floor, so the first call takes about half an hour on one core;
+``benchmarks/second_paper.py --write`` saves the same rows (``rows``) to ``benchmarks/results/second_paper.json``,
+which the chapter prints with the same functions (``print_table2``, ``print_ablation``, ``print_targets``).
+
+A row (``rows``) is a dict: ``pipeline`` (a step's name), ``experiment`` (I-IX), the columns of
+``gpo.metrics.PaperTable2`` at the paper's ground-truth samples, the same prefixed ``continuous_`` against every
+frame's truth, ``drift_percent_per_m`` (the suite's RPE per metre, None under a metre), ``frames`` and
+``frames_per_second``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+
+import matplotlib.pyplot as plt
+
+from gpo.experiments.table2 import EXPERIMENTS, HEADER, ablation_configs, experiment, format_row, reproduce_table2
+from gpo.metrics import PaperTable2
+
+ABLATED = ("I", "II", "III", "VIII", "IX")  # the experiments the ablation is printed for
+TARGETS_PERCENT = {"I": 0.2, "II": 0.2, "III": 0.2, "IX": 0.5}  # the shipped pipeline's final error, % of distance
+PAPER_GAP = 3.0  # as published, a final error more than this many times the paper's is traced through the ablation
+
+
+def rows(table: dict) -> list[dict]:
+    """The rows (see the module) of ``reproduce_table2``'s ``{pipeline: [Table2Row]}``."""
+    found = []
+    for pipeline, measured in table.items():
+        for row in measured:
+            continuous = {f"continuous_{key}": value for key, value in vars(row.continuous).items()}
+            found.append({
+                "pipeline": pipeline, "experiment": row.experiment.number, **vars(row.paper), **continuous,
+                "drift_percent_per_m": row.drift_percent_per_m, "frames": row.frames,
+                "frames_per_second": round(row.frames_per_second, 1),
+            })  # fmt: skip
+    return [{key: None if isinstance(v, float) and math.isnan(v) else v for key, v in row.items()} for row in found]
+
+
+def _paper_row(row: dict, prefix: str = "") -> PaperTable2:
+    values = {f.name: row[prefix + f.name] for f in dataclasses.fields(PaperTable2)}
+    return PaperTable2(**{key: math.nan if value is None else value for key, value in values.items()})
+
+
+def _find(saved: list[dict], pipeline: str, number: str) -> dict | None:
+    return next((row for row in saved if row["pipeline"] == pipeline and row["experiment"] == number), None)
+
+
+def print_table2(saved: list[dict], pipelines=("as published", "shipped")) -> None:
+    """Table 2 of each of ``pipelines`` over the experiments ``saved`` holds, in the paper's columns at its ground
+    truth's samples, the suite's drift per metre beside, then the paper's own rows; III again against every frame."""
+    numbers = [e.number for e in EXPERIMENTS if _find(saved, pipelines[0], e.number)]
+    for pipeline in pipelines:
+        print(f"the pipeline {pipeline}")
+        print(HEADER + f"{'drift[%/m]':>11}")
+        for number in numbers:
+            row = _find(saved, pipeline, number)
+            drift = "-" if row["drift_percent_per_m"] is None else f"{row["drift_percent_per_m"]:.2f}"
+            print(format_row(number, _paper_row(row)) + f"{drift:>11}")
+            if number == "III":
+                print(format_row("  every frame", _paper_row(row, "continuous_")))
+        print()
+    print("the paper's rows")
+    print(HEADER)
+    for number in numbers:
+        print(format_row(number, experiment(number).paper))
+
+
+def print_ablation(saved: list[dict], numbers=ABLATED) -> None:
+    """Each step from the paper's method to the shipped pipeline (one row each, the suite's changes added in turn)
+    on each of the experiments ``numbers``: the final error (mm) and the heading RMSE (degrees, against every
+    frame's truth), then the paper's (its heading RMSE where it printed one); experiments ``saved`` lacks are left
+    out."""
+    numbers = [number for number in numbers if _find(saved, "shipped", number)]
+    steps = list(dict.fromkeys(row["pipeline"] for row in saved if row["experiment"] == numbers[0]))
+    print(f"{'':20}" + "".join(f"{number:>19}" for number in numbers))
+    print(f"{'':20}" + f"{'final[mm]':>10}{'head.[°]':>9}" * len(numbers))
+    for step in steps:
+        cells = []
+        for number in numbers:
+            row = _find(saved, step, number)
+            cells.append(f"{row['final_error_mm']:10.1f}{row['continuous_heading_rmse_deg']:9.2f}")
+        print(f"{step:20}" + "".join(cells))
+    paper = [experiment(number).paper for number in numbers]
+    print(f"{'the paper':20}" + "".join(
+        f"{p.final_error_mm:10.1f}" + (f"{'-':>9}" if math.isnan(p.heading_rmse_deg) else f"{p.heading_rmse_deg:9.2f}")
+        for p in paper
+    ))  # fmt: skip
+
+
+def draw_ablation(saved: list[dict], numbers=ABLATED, ax=None):
+    """The final error (% of the distance, log scale) of each step of the ablation, one line per experiment of
+    ``numbers`` that ``saved`` holds, each with the paper's own final error dotted in its colour."""
+    numbers = [number for number in numbers if _find(saved, "shipped", number)]
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(11, 4.2))
+    steps = list(dict.fromkeys(row["pipeline"] for row in saved if row["experiment"] == numbers[0]))
+    for number in numbers:
+        values = [_find(saved, step, number)["final_error_percent"] for step in steps]
+        (line,) = ax.plot(range(len(steps)), values, marker="o", label=number)
+        ax.axhline(experiment(number).paper.final_error_percent, color=line.get_color(), ls=":", lw=1)
+    ax.set_xticks(range(len(steps)), steps, rotation=20, ha="right")
+    ax.set_yscale("log")
+    ax.set_ylabel("final error [% of distance]")
+    ax.set_title("from the paper's method to the shipped pipeline (dotted: the paper's own final errors)")
+    ax.legend(title="experiment")
+    return ax
+
+
+def print_targets(saved: list[dict]) -> None:
+    """The targets, each met or missed with its number: the shipped pipeline's final error on I-III and IX, its
+    heading RMSE on I-II against the paper's, IV-VIII's final errors against the paper's; as published, I-III's
+    final errors against the paper's and, where more than ``PAPER_GAP`` times it, the step of the ablation that
+    divides the error by the most."""
+    for number, target in TARGETS_PERCENT.items():
+        row = _find(saved, "shipped", number)
+        if row is not None:
+            value = row["final_error_percent"]
+            print(f"shipped {number:5} final error {value:.3f} % (target at most {target} %): {_met(value <= target)}")
+    for number in ("I", "II"):
+        row, paper = _find(saved, "shipped", number), experiment(number).paper
+        if row is not None:
+            value = row["heading_rmse_deg"]
+            print(f"shipped {number:5} heading RMSE {value:.2f} deg (the paper: {paper.heading_rmse_deg} deg): "
+                  f"{_met(value < paper.heading_rmse_deg)}")
+    for number in ("IV", "V", "VI", "VII", "VIII"):
+        row, paper = _find(saved, "shipped", number), experiment(number).paper
+        if row is not None:
+            value = row["final_error_mm"]
+            print(f"shipped {number:5} final error {value:.2f} mm (the paper: {paper.final_error_mm} mm): "
+                  f"{_met(value <= paper.final_error_mm)}")
+    for number in ("I", "II", "III"):
+        row, paper = _find(saved, "as published", number), experiment(number).paper
+        if row is None:
+            continue
+        times = row["final_error_mm"] / paper.final_error_mm
+        line = f"as published {number:4} final error {row['final_error_mm']:.1f} mm, {times:.1f} times the paper's " \
+               f"{paper.final_error_mm} mm"
+        if times > PAPER_GAP:
+            line += f"; the step that divides it most: {_largest_drop(saved, number)}"
+        print(line)
+
+
+def _met(met: bool) -> str:
+    return "met" if met else "MISSED"
+
+
+def _largest_drop(saved: list[dict], number: str) -> str:
+    """The ablation's step that divides the experiment's final error by the most, with the error before and after."""
+    chain = [row["final_error_mm"] for row in saved if row["experiment"] == number]
+    steps = [row["pipeline"] for row in saved if row["experiment"] == number]
+    k = max(range(1, len(chain)), key=lambda i: chain[i - 1] / chain[i])
+    return f"{steps[k]} ({chain[k - 1]:.1f} -> {chain[k]:.1f} mm, {chain[k - 1] / chain[k]:.0f} times less)"
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("experiments", nargs="*", default=list(ABLATED), help="of I ... IX (default: I II III VIII IX)")
+    args = parser.parse_args(argv)
+    chosen = [experiment(number) for number in args.experiments]
+    saved = rows(reproduce_table2(ablation_configs(), chosen))
+    print_table2(saved)
+    print()
+    print_ablation(saved, [e.number for e in chosen])
+    print()
+    print_targets(saved)
+
+
+if __name__ == "__main__":  # `python -m gpo.book.ch08_table2`: the runs made or read back, and printed
+    main()
