@@ -61,7 +61,7 @@ def print_table2(saved: list[dict], pipelines=("as published", "shipped")) -> No
         print(HEADER + f"{'drift[%/m]':>11}")
         for number in numbers:
             row = _find(saved, pipeline, number)
-            drift = "-" if row["drift_percent_per_m"] is None else f"{row["drift_percent_per_m"]:.2f}"
+            drift = "-" if row["drift_percent_per_m"] is None else f"{row['drift_percent_per_m']:.2f}"
             print(format_row(number, _paper_row(row)) + f"{drift:>11}")
             if number == "III":
                 print(format_row("  every frame", _paper_row(row, "continuous_")))
