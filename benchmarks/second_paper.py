@@ -22,7 +22,7 @@ from pathlib import Path
 
 import cv2
 
-from gpo.book.ch08_table2 import ABLATED, print_ablation, print_table2, print_targets, rows
+from gpo.book.ch08_table2 import ABLATED, print_report, rows
 from gpo.experiments.table2 import EXPERIMENTS, ablation_configs, experiment, reproduce_table2
 from gpo.io.outputs import write_json
 
@@ -37,11 +37,7 @@ def main() -> None:
     cv2.setNumThreads(args.threads)
     chosen = [experiment(number) for number in args.experiments]
     saved = rows(reproduce_table2(ablation_configs(), chosen, cache=not args.no_cache))
-    print_table2(saved)
-    print()
-    print_ablation(saved, [number for number in ABLATED if number in args.experiments])
-    print()
-    print_targets(saved)
+    print_report(saved, [number for number in ABLATED if number in args.experiments])
     if args.write:
         print(f"wrote {write_json(args.write, saved)}")
 

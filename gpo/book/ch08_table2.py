@@ -52,6 +52,11 @@ def _find(saved: list[dict], pipeline: str, number: str) -> dict | None:
     return next((row for row in saved if row["pipeline"] == pipeline and row["experiment"] == number), None)
 
 
+def _steps(saved: list[dict], number: str) -> list[str]:
+    """The pipelines ``saved`` ran on experiment ``number``, in the ablation's order."""
+    return list(dict.fromkeys(row["pipeline"] for row in saved if row["experiment"] == number))
+
+
 def print_table2(saved: list[dict], pipelines=("as published", "shipped")) -> None:
     """Table 2 of each of ``pipelines`` over the experiments ``saved`` holds, in the paper's columns at its ground
     truth's samples, the suite's drift per metre beside, then the paper's own rows; III again against every frame."""
@@ -78,7 +83,7 @@ def print_ablation(saved: list[dict], numbers=ABLATED) -> None:
     frame's truth), then the paper's (its heading RMSE where it printed one); experiments ``saved`` lacks are left
     out."""
     numbers = [number for number in numbers if _find(saved, "shipped", number)]
-    steps = list(dict.fromkeys(row["pipeline"] for row in saved if row["experiment"] == numbers[0]))
+    steps = _steps(saved, numbers[0])
     print(f"{'':20}" + "".join(f"{number:>19}" for number in numbers))
     print(f"{'':20}" + f"{'final[mm]':>10}{'head.[°]':>9}" * len(numbers))
     for step in steps:
@@ -98,10 +103,9 @@ def draw_ablation(saved: list[dict], numbers=ABLATED, ax=None):
     """The final error (% of the distance, log scale) of each step of the ablation, one line per experiment of
     ``numbers`` that ``saved`` holds, each with the paper's own final error dotted in its colour."""
     numbers = [number for number in numbers if _find(saved, "shipped", number)]
-
     if ax is None:
         _, ax = plt.subplots(figsize=(11, 4.2))
-    steps = list(dict.fromkeys(row["pipeline"] for row in saved if row["experiment"] == numbers[0]))
+    steps = _steps(saved, numbers[0])
     for number in numbers:
         values = [_find(saved, step, number)["final_error_percent"] for step in steps]
         (line,) = ax.plot(range(len(steps)), values, marker="o", label=number)
@@ -154,10 +158,19 @@ def _met(met: bool) -> str:
 
 def _largest_drop(saved: list[dict], number: str) -> str:
     """The ablation's step that divides the experiment's final error by the most, with the error before and after."""
-    chain = [row["final_error_mm"] for row in saved if row["experiment"] == number]
-    steps = [row["pipeline"] for row in saved if row["experiment"] == number]
+    steps = _steps(saved, number)
+    chain = [_find(saved, step, number)["final_error_mm"] for step in steps]
     k = max(range(1, len(chain)), key=lambda i: chain[i - 1] / chain[i])
     return f"{steps[k]} ({chain[k - 1]:.1f} -> {chain[k]:.1f} mm, {chain[k - 1] / chain[k]:.0f} times less)"
+
+
+def print_report(saved: list[dict], numbers) -> None:
+    """Table 2, the ablation over the experiments of ``numbers`` and the targets, as the chapter shows them."""
+    print_table2(saved)
+    print()
+    print_ablation(saved, numbers)
+    print()
+    print_targets(saved)
 
 
 def main(argv=None) -> None:
@@ -165,12 +178,7 @@ def main(argv=None) -> None:
     parser.add_argument("experiments", nargs="*", default=list(ABLATED), help="of I ... IX (default: I II III VIII IX)")
     args = parser.parse_args(argv)
     chosen = [experiment(number) for number in args.experiments]
-    saved = rows(reproduce_table2(ablation_configs(), chosen))
-    print_table2(saved)
-    print()
-    print_ablation(saved, [e.number for e in chosen])
-    print()
-    print_targets(saved)
+    print_report(rows(reproduce_table2(ablation_configs(), chosen)), [e.number for e in chosen])
 
 
 if __name__ == "__main__":  # `python -m gpo.book.ch08_table2`: the runs made or read back, and printed
