@@ -75,7 +75,7 @@ def test_wrong_board_size_two_boards_and_another_camera_are_clear_errors(tmp_pat
     image, calib = _files(tmp_path, "t265")
     args = ["mount", str(image), "--camera", str(calib), "--square", "0.02", "--out", str(tmp_path / "m.yaml")]
     assert "check --board" in _fails([*args, "--board", "9x7"], capsys)
-    assert "more inner corners than 6 x 5" in _fails([*args, "--board", "6x5"], capsys)
+    assert "more inner corners than 6x5" in _fails([*args, "--board", "6x5"], capsys)
     rig, board = RIGS["t265"](), FLOOR_BOARDS["t265"]
     second = FloorBoard(board.board, board.x - 0.02, board.y + 0.16, board.yaw)
     floor = make_floor("raised", (-1.0, 2.0, -1.5, 1.5), TEXEL_M["t265"], 0)

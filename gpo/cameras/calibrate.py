@@ -90,10 +90,10 @@ from gpo.cameras.chessboard import (
     check_pattern_size,
     find_corners,
     forms_grid,
+    larger_board,
     pattern_hint,
     pattern_text,
     planar_pose,
-    whole_board,
 )
 from gpo.cameras.eucm import EUCM
 from gpo.cameras.files import Camera
@@ -266,11 +266,12 @@ def _check_whole_board(image: np.ndarray, name: str, board: Chessboard) -> None:
     """Raise ``CalibrationError`` when the board in ``image`` (named ``name``, one where the pattern was found) has
     more inner corners than ``board``: the corners found are then a part of it, a different part in each view, and
     the fit of such parts is wrong, its focal length several times off."""
-    found = whole_board(image, board.pattern_size)
-    if found is not None and found[0] * found[1] > board.pattern_size[0] * board.pattern_size[1]:
-        given, whole = pattern_text(board.pattern_size), pattern_text(found)
+    larger = larger_board(image, board.pattern_size)
+    if larger is not None:
+        (size, whole), given = larger, pattern_text(board.pattern_size)
+        found, hint = (pattern_text(size), pattern_text(size)) if whole else (f"at least {pattern_text(size)}", "as")
         raise CalibrationError(
-            f"{name} shows a board of {whole} inner corners, more than the {given} given: give --board {whole} (the "
+            f"{name} shows a board of {found} inner corners, more than the {given} given: give --board {hint} (the "
             "whole board's inner corners per row x per column; a part of a board gives a wrong calibration)"
         )
 

@@ -241,6 +241,35 @@ def whole_board(image: np.ndarray, pattern_size: tuple[int, int] = (3, 3)) -> tu
     return (longer, shorter) if pattern_size[0] >= pattern_size[1] else (shorter, longer)
 
 
+def larger_board(
+    image: np.ndarray,
+    pattern_size: tuple[int, int],
+    camera: CameraModel | None = None,
+    rectify: bool | None = None,
+) -> tuple[tuple[int, int], bool] | None:
+    """A board in ``image`` with more inner corners than ``pattern_size``, or None: (its inner corners, whether that is
+    the whole board's count rather than a lower bound). Corners found for ``pattern_size`` on such a board are a part
+    of it, in the wrong places.
+
+    On the image itself (``rectify`` None or False), ``whole_board`` grows a pattern to every corner of its board: the
+    given one, then a 3 x 3 (it does not grow from every size). In the perspective views (``camera`` given, ``rectify``
+    None or True), a pattern one row or one column larger is looked for with ``find_corners``'s ``MOUNT`` search,
+    which gives a lower bound. (On the image, that search and the classic detector read a board's outer edge against
+    a white margin as one more row of corners.)"""
+    if rectify is not True:
+        for seed in (pattern_size, (3, 3)):
+            whole = whole_board(image, seed)
+            if whole is not None and whole[0] * whole[1] > pattern_size[0] * pattern_size[1]:
+                return whole, True
+    if camera is None or rectify is False:
+        return None
+    nx, ny = pattern_size
+    for larger in ((nx + 1, ny), (nx, ny + 1)):
+        if find_corners(image, larger, camera, MOUNT, rectify=True) is not None:
+            return larger, False
+    return None
+
+
 def pattern_hint(images: list[np.ndarray], pattern_size: tuple[int, int], names: list[str], looks: int = 2) -> str:
     """A hint, or "", when no board of ``pattern_size`` was found in ``images`` (named ``names``): the board that is in
     view, the largest ``whole_board`` finds in the first ``looks`` of them. Larger than ``pattern_size``: give its

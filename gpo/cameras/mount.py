@@ -77,7 +77,7 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from gpo.cameras.base import CameraModel
-from gpo.cameras.chessboard import MOUNT, find_corners, planar_pose
+from gpo.cameras.chessboard import MOUNT, find_corners, larger_board, pattern_text, planar_pose
 from gpo.cameras.files import Camera
 from gpo.cameras.rig import CameraMount
 from gpo.cameras.targets import Chessboard, FloorBoard
@@ -482,18 +482,16 @@ def _from_down_deg(estimate: MountEstimate) -> float:
 
 
 def _check_whole_board(image: np.ndarray, camera: Camera, board: Chessboard, rectify: bool | None) -> None:
-    """Raise ``MountError`` when a board of one more row or column of squares is in view: ``board`` is then a part
-    of the board lying there, and its corners would be read in the wrong places. ``rectify`` as
+    """Raise ``MountError`` when a board of more inner corners is in view: ``board`` is then a part of the board
+    lying there, and its corners would be read in the wrong places. ``rectify`` as
     ``gpo.cameras.mount.detect_corners``: where the board itself was found."""
-    nx, ny = board.squares
-    for larger in ((nx + 1, ny), (nx, ny + 1)):
-        try:
-            detect_corners(image, camera, Chessboard(larger, board.square, board.margin), rectify)
-        except MountError:
-            continue
+    larger = larger_board(image, board.pattern_size, camera, rectify)
+    if larger is not None:
+        (size, whole), given = larger, pattern_text(board.pattern_size)
+        found = pattern_text(size) if whole else f"at least {pattern_text(size)}"
         raise MountError(
-            f"the board in view has more inner corners than {nx - 1} x {ny - 1} (at least {larger[0] - 1} x "
-            f"{larger[1] - 1}): give --board as the whole board's inner corners per row x per column"
+            f"the board in view has more inner corners than {given} ({found}): give --board as the whole board's "
+            "inner corners per row x per column"
         )
 
 
