@@ -127,7 +127,8 @@ def distribution(errors: pd.Series) -> dict:
 def explanation(row: pd.Series, out: Path) -> dict:
     """What a run's summary (in the sweep folder ``out``) says of it: its status, error, flags by reason, frames not
     measured, measured frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor), and
-    the distance it measured over the distance driven."""
+    the distance it measured over the distance driven; ``explained`` when a caution, a flag, a frame not measured or
+    a status other than ok names a cause (a slower layer alone does not: it is seen on runs that end right too)."""
     flags = json.loads(row["flags"]) if isinstance(row.get("flags"), str) else {}
     frames = {
         name: int(row[f"frames_{name}"])
@@ -148,7 +149,7 @@ def explanation(row: pd.Series, out: Path) -> dict:
         "frames_not_measured": frames,
         "frames_slower_layer": slower,
         "cautions": cautions,
-        "explained": bool(cautions or row["status"] != "ok"),
+        "explained": bool(cautions or flags or frames or row["status"] != "ok"),
     }
 
 

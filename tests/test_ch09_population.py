@@ -3,13 +3,16 @@
 import matplotlib.pyplot as plt
 
 from gpo.book.ch09_population import (
+    PEER,
     distributions_text,
     draw_population,
     draw_population_distributions,
+    failing_text,
     finish,
     population_errors,
     population_groups,
     population_text,
+    run_errors,
 )
 
 
@@ -83,3 +86,25 @@ def test_the_distributions_figure_has_a_panel_per_method_with_both_populations()
     points = sum(len(c.get_offsets()) for c in figure.axes[0].collections if len(c.get_offsets()))
     assert points >= 4 and figure.axes[0].get_yscale() == "log"
     plt.close(figure)
+
+
+def test_the_correlation_peers_runs_count_as_a_method_of_their_own():
+    result = dict(DRAWN, peer={"runs": {"draw000-fisheye": {"final_error_percent": 0.5, "final_heading_deg": 1.0},
+                                        "draw002-fisheye": {"final_error_percent": 3.0, "final_heading_deg": 2.0}}})
+    peer = [row for row in run_errors(result) if row[0] == PEER]
+    assert peer == [(PEER, ("wood",), "matte", 0.5), (PEER, ("industrial",), "glossy", 3.0)]
+    lines = distributions_text({"paper": result}).splitlines()
+    assert [line.split()[:4] for line in lines if line.startswith(PEER)] == [[PEER, "paper", "2", "1.750"]]
+
+
+def test_the_failing_runs_are_counted_with_those_no_cause_names():
+    result = {"methods": {"gpo-exact": {"runs": 4, "p90_target": 0.3}, "fused": {"runs": 4, "p90_target": None},
+                          "gpo-rigid": {"runs": 4, "p90_target": 0.5}},
+              "failing": [{"method": "gpo-exact", "over": 0.3, "explained": True},
+                          {"method": "gpo-exact", "over": 0.3, "explained": False},
+                          {"method": "fused", "over": 0.3, "explained": True}]}
+    lines = failing_text(result).splitlines()
+    assert lines[0].split() == ["gpo-exact", "2", "of", "4", "runs", "over", "0.3", "%", "or", "not", "finished,",
+                                "1", "of", "them", "without", "a", "named", "cause"]
+    assert lines[1].split()[:8] == ["fused", "1", "of", "4", "runs", "over", "0.3", "%"]
+    assert lines[2].split()[:8] == ["gpo-rigid", "0", "of", "4", "runs", "over", "0.5", "%"]

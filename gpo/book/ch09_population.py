@@ -78,16 +78,35 @@ def finish(parameters: dict) -> str:
     return "glossy" if sheen == "on" else "matte"
 
 
+PEER = "peer"  # the correlation odometer of benchmarks/correlation_peer.py, run with --peer
+
+
 def run_errors(result: dict) -> list[tuple[str, tuple[str, ...], str, float]]:
-    """A ``benchmarks/population.py`` result's runs as (method, the floor's kinds, its finish, final error %); a run
-    that failed counts as infinitely far."""
+    """A ``benchmarks/population.py`` result's runs as (method, the floor's kinds, its finish, final error %), the
+    correlation peer's (``--peer``) as method ``PEER``; a run that failed counts as infinitely far."""
+    runs = [*result["runs"], *({"draw": draw, "method": PEER, **errors}
+                               for draw, errors in result.get("peer", {}).get("runs", {}).items())]
     rows = []
-    for run in result["runs"]:
+    for run in runs:
         parameters = result["draw_parameters"][run["draw"]]
         kinds = tuple(kind for kind in FLOOR_KINDS if kind in parameters["floor"])
         error = np.inf if run["final_error_percent"] is None else run["final_error_percent"]
         rows.append((run["method"], kinds, finish(parameters), error))
     return rows
+
+
+def failing_text(result: dict) -> str:
+    """Per method, how many runs of a ``benchmarks/population.py`` result ended over the error it lists them from
+    (the method's p90 target; ``gpo`` 1 %, ``fused`` 0.3 %) or did not finish, and how many of those carry no caution,
+    flag or error that names a cause."""
+    lines = []
+    for method, stats in result["methods"].items():
+        failing = [run for run in result["failing"] if run["method"] == method]
+        over = {run["over"] for run in failing} or {stats["p90_target"]}
+        limit = "/".join(f"{value} %" for value in sorted(over) if value is not None) or "its limit"
+        lines.append(f"{method:10s} {len(failing):3d} of {stats['runs']} runs over {limit} or not finished, "
+                     f"{sum(not run['explained'] for run in failing)} of them without a named cause")
+    return "\n".join(lines)
 
 
 def population_groups(result: dict) -> dict[str, dict[str, list[float]]]:
@@ -104,7 +123,7 @@ def distributions_text(populations: dict[str, dict]) -> str:
     """Each method's final errors over each population (name -> result): runs, median, p90 and worst over all its
     draws, then the p90 per floor kind and per finish; a method's target beside its name."""
     columns = ["all", *FLOOR_KINDS, *FINISHES]
-    lines = [f"{'method':10s} {'population':20s} {'runs':>4s} {'median':>7s} {'p90':>7s} {'worst':>7s} | p90 on "
+    lines = [f"{'method':16s} {'population':16s} {'runs':>4s} {'median':>7s} {'p90':>7s} {'worst':>7s} | p90 on "
              + " ".join(f"{c:>10s}" for c in columns[1:])]
     grouped = {name: population_groups(result) for name, result in populations.items()}
     methods = list(dict.fromkeys(m for groups in grouped.values() for m in groups))
@@ -115,7 +134,7 @@ def distributions_text(populations: dict[str, dict]) -> str:
                 continue
             errors = np.array(groups[method]["all"])
             cells = [_p90(groups[method].get(column)) for column in columns[1:]]
-            lines.append(f"{method + target:10s} {name:20s} {len(errors):4d} {np.median(errors):7.3f} "
+            lines.append(f"{method + target:16s} {name:16s} {len(errors):4d} {np.median(errors):7.3f} "
                          f"{_p90(errors)} {errors.max():7.2f} | p90 on " + " ".join(f"{c:>10s}" for c in cells))
     lines.append("final position error, % of the distance; p90 of each group (-: no draw); (target p90)")
     return "\n".join(lines)
