@@ -6,7 +6,7 @@ import pytest
 
 from gpo.motion.klt import TEXTURE_LAG_PX, FloorFlow, FlowError, KLTParameters, floor_texture
 from gpo.motion.layers import LAYER_MIN_TRACKS, floor_layer
-from gpo.motion.overview import OverviewShift, pulled_short
+from gpo.motion.overview import OverviewShift, pulled_short, replaces_median
 from gpo.odometry.kinematics import increment_from_point_pairs
 
 
@@ -302,6 +302,23 @@ def test_the_whole_view_replaces_a_median_only_where_a_slower_layer_pulled_it_sh
                                                                                        replaced):
     median = None if median is None else np.array(median)
     assert pulled_short(median, flag, OverviewShift(np.array(shift), peak), 1.5, 0.3) is replaced
+
+
+@pytest.mark.parametrize(
+    ("median", "shift", "predicted", "peak", "replaced"),
+    [
+        ((0.0, 5.0), (0.0, 9.0), (0.0, 9.0), 0.8, True),  # pulled short along the line, whatever the prediction
+        ((-2.0, 1.0), (0.0, 9.0), (0.0, 8.5), 0.8, True),  # a glossy spin: the median leaves the line, the shift steady
+        ((-0.02, 2.07), (-6.34, 0.42), (0.0, 2.0), 0.6, False),  # Test1: a sheet dragged away from the robot's motion
+        ((0.1, 8.9), (0.0, 9.0), (5.0, 5.0), 0.8, False),  # within the tolerance: the two agree
+        ((-2.0, 1.0), (0.0, 9.0), (0.0, 8.5), 0.2, False),  # the glossy spin, the peak no clearer than noise's
+    ],
+)
+def test_the_whole_view_replaces_a_median_further_than_it_from_the_predicted_motion(median, shift, predicted, peak,
+                                                                                      replaced):
+    found = OverviewShift(np.array(shift), peak)
+    assert replaces_median(np.array(median), None, found, np.array(predicted), 1.5, 0.3) is replaced
+    assert replaces_median(None, "too few tracks kept", found, np.array(predicted), 1.5, 0.3) is (peak >= 0.3)
 
 
 def test_the_whole_view_check_keeps_tracks_that_agree_with_it():

@@ -44,7 +44,7 @@ import numpy as np
 from gpo.motion.keyframes import FRAME_TO_FRAME, KeyframePolicy
 from gpo.motion.layers import slower_count, slower_layer
 from gpo.motion.median import median_of
-from gpo.motion.overview import Overview, OverviewShift, pulled_short
+from gpo.motion.overview import Overview, OverviewShift, replaces_median
 from gpo.motion.ranges import check_rules, in_range
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
@@ -91,9 +91,9 @@ class KLTParameters:
     no common mean and contrast), to see what the normalisation is for.
     ``overview_scale``: the whole-view check (``gpo.motion.overview``) correlates views this many times wider and
     longer than the floor image (0: no check; the estimators that take it say so); ``overview_tolerance_px``: a flow
-    median within this of the overview's shift's line and short of it along the line by more (floor-image pixels) is
-    replaced by it (``gpo.motion.overview.pulled_short``), when the overview's correlation peak reaches
-    ``overview_min_peak``.
+    median within this of the overview's shift's line and short of it along the line by more (floor-image pixels), or
+    further than this from it and further from the predicted motion, is replaced by it
+    (``gpo.motion.overview.replaces_median``), when the overview's correlation peak reaches ``overview_min_peak``.
     """
 
     max_corners: int = 150
@@ -308,7 +308,7 @@ class FloorFlow:
         prediction = (self._velocity * elapsed).astype(np.float32)
         measurement, kept, frame_median = self._measure(reference, image, points, last, prediction)
         if found is not None:
-            measurement = self._checked(measurement, found, frame_median)
+            measurement = self._checked(measurement, found, frame_median, prediction)
         if measurement.quality.overview:  # a translation from the previous frame: the next start from this one
             self._velocity, self._predicted = (measurement.median / elapsed).astype(np.float32), True
             self._new_keyframe(image, texture, self._detect(image), detected=True)
@@ -400,12 +400,15 @@ class FloorFlow:
             self._overview = Overview(self.parameters.overview_scale, view.shape[::-1])
         return self._overview.observe(view)
 
-    def _checked(self, measurement: FlowMeasurement, found: OverviewShift, moved: np.ndarray) -> FlowMeasurement:
-        """``measurement``, or where the tracks' median motion since the previous frame (``moved``) was pulled short of
-        the whole-view check's shift (``gpo.motion.overview``), that shift measured at the floor image's middle from the
-        previous frame: a ``OVERVIEW_GRID`` square grid of points."""
+    def _checked(
+        self, measurement: FlowMeasurement, found: OverviewShift, moved: np.ndarray, predicted: np.ndarray
+    ) -> FlowMeasurement:
+        """``measurement``, or where the whole-view check's shift replaces the tracks' median motion since the previous
+        frame (``moved``; ``predicted``: the motion predicted from the frame before; ``gpo.motion.overview``), that
+        shift measured at the floor image's middle from the previous frame: a ``OVERVIEW_GRID`` square grid of
+        points."""
         p = self.parameters
-        if not pulled_short(moved, measurement.flag, found, p.overview_tolerance_px, p.overview_min_peak):
+        if not replaces_median(moved, measurement.flag, found, predicted, p.overview_tolerance_px, p.overview_min_peak):
             return measurement
         width, height = self._size
         u, v = np.meshgrid(*(np.linspace(0.25, 0.75, OVERVIEW_GRID) * (side - 1) for side in (width, height)))
