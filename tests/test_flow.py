@@ -301,7 +301,10 @@ def test_the_whole_view_check_reads_the_floor_under_static_reflections():
 def test_the_whole_view_replaces_a_median_only_where_a_slower_layer_pulled_it_short(median, flag, shift, peak,
                                                                                        replaced):
     median = None if median is None else np.array(median)
-    assert pulled_short(median, flag, OverviewShift(np.array(shift), peak), 1.5, 0.3) is replaced
+    predicted = np.zeros(2) if median is None else median  # a prediction that never prefers the shift
+    assert replaces_median(median, flag, OverviewShift(np.array(shift), peak), predicted, 1.5, 0.3) is replaced
+    if median is not None and peak >= 0.3:
+        assert pulled_short(median, np.array(shift), 1.5) is replaced
 
 
 @pytest.mark.parametrize(

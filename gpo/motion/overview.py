@@ -62,21 +62,14 @@ class Overview:
         return OverviewShift(self.scale * np.array([du, dv]), float(peak))
 
 
-def pulled_short(
-    median: np.ndarray, flag: str | None, overview: OverviewShift, tolerance_px: float, min_peak: float
-) -> bool:
-    """Whether the overview's shift should replace the flow's ``median`` (floor-image pixels; ``flag`` when the flow
-    was flagged): the overview's peak reaches ``min_peak``, and the flow was flagged or its median was pulled short
-    by a slower layer: within ``tolerance_px`` of the shift's line, more than ``tolerance_px`` short of the shift
-    along it, the shift at least ``2 * tolerance_px`` long (a shorter one cannot tell the pull from a crawl)."""
-    if overview.peak < min_peak:
-        return False
-    if flag is not None:
-        return True
-    length = float(np.hypot(*overview.shift_px))
+def pulled_short(median: np.ndarray, shift_px: np.ndarray, tolerance_px: float) -> bool:
+    """Whether the flow's ``median`` (floor-image pixels) shows a slower layer's pull on it: within ``tolerance_px``
+    of the overview's ``shift_px`` line, more than ``tolerance_px`` short of the shift along it, the shift at least
+    ``2 * tolerance_px`` long (a shorter one cannot tell the pull from a crawl)."""
+    length = float(np.hypot(*shift_px))
     if length < 2.0 * tolerance_px:
         return False
-    along = overview.shift_px / length
+    along = shift_px / length
     beside = abs(float(median[0] * along[1] - median[1] * along[0]))
     return float(median @ along) < length - tolerance_px and beside <= tolerance_px
 
@@ -90,10 +83,15 @@ def replaces_median(
     min_peak: float,
 ) -> bool:
     """Whether the overview's shift should replace the flow's ``median`` (floor-image pixels; ``flag`` when the flow
-    was flagged): ``pulled_short``, or the two lie more than ``tolerance_px`` apart and the shift lies nearer the
-    motion ``predicted`` from the previous frame (pixels) than the median does."""
-    if pulled_short(median, flag, overview, tolerance_px, min_peak):
-        return True
-    if flag is not None or overview.peak < min_peak or np.hypot(*(median - overview.shift_px)) <= tolerance_px:
+    was flagged): the overview's peak reaches ``min_peak``, and the flow was flagged, or the two lie more than
+    ``tolerance_px`` apart and the median was ``pulled_short`` or the shift lies nearer the motion ``predicted`` from
+    the previous frame (pixels) than the median does."""
+    if overview.peak < min_peak:
         return False
-    return float(np.hypot(*(overview.shift_px - predicted))) < float(np.hypot(*(median - predicted)))
+    if flag is not None:
+        return True
+    shift = overview.shift_px
+    if np.hypot(*(median - shift)) <= tolerance_px:
+        return False
+    nearer = float(np.hypot(*(shift - predicted))) < float(np.hypot(*(median - predicted)))
+    return pulled_short(median, shift, tolerance_px) or nearer
