@@ -4,12 +4,15 @@ paper's."""
 
 from __future__ import annotations
 
+from gpo.pipeline.config import Route
+
 NAME = "table3"
 HELP = "the first paper's Table 3 (median against mean vector) on the simulated short paths, the paper's beside"
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--route", default="ortho-gpi", choices=("ortho-gpi", "gpi", "analytic"),
+    images = [route.value for route in Route if route is not Route.KEYPOINTS]  # the fisheye's floor images
+    parser.add_argument("--route", default=Route.ORTHO_GPI.value, choices=images,
                         help="the floor image (default: ortho-gpi, the paper's)")
 
 
