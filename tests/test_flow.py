@@ -6,7 +6,7 @@ import pytest
 
 from gpo.motion.klt import TEXTURE_LAG_PX, FloorFlow, FlowError, KLTParameters, floor_texture
 from gpo.motion.layers import LAYER_MIN_TRACKS, floor_layer
-from gpo.motion.overview import OverviewShift, pulled_short, replaces_median
+from gpo.motion.overview import OverviewShift, disagrees, pulled_short, replaces_median
 from gpo.odometry.kinematics import increment_from_point_pairs
 
 
@@ -282,6 +282,8 @@ def test_the_whole_view_check_reads_the_floor_under_static_reflections():
         errors[check] = np.mean([np.hypot(m.median[0], m.median[1] + 6.0) for m in measured])
         replaced = sum(m.quality.overview for m in measured)
         assert replaced >= 4 if check else replaced == 0  # 6 of the 13 frames replaced, measured
+        doubted = [m.quality.disagreed for m in measured]
+        assert all(doubted[k] for k, m in enumerate(measured) if m.quality.overview) and (any(doubted) is check)
     assert errors[False] > 3.5 and errors[True] < 1.5  # 4.4 and 1.2 px, measured
 
 
@@ -308,6 +310,18 @@ def test_the_whole_view_replaces_a_median_only_where_a_slower_layer_pulled_it_sh
 
 
 @pytest.mark.parametrize(
+    ("median", "shift", "peak", "doubt"),
+    [
+        ((0.1, 13.3), (0.05, 13.31), 0.8, False),  # a matte floor: the two agree
+        ((-0.02, 2.07), (-6.34, 0.42), 0.6, True),  # Test1's sheet: the median kept, the frame in doubt all the same
+        ((0.0, 0.0), (0.0, 9.0), 0.2, False),  # a peak no clearer than noise's says nothing
+    ],
+)
+def test_a_frame_is_in_doubt_where_the_tracks_and_a_clear_whole_view_disagree(median, shift, peak, doubt):
+    assert disagrees(np.array(median), OverviewShift(np.array(shift), peak), 1.5, 0.3) is doubt
+
+
+@pytest.mark.parametrize(
     ("median", "shift", "predicted", "peak", "replaced"),
     [
         ((0.0, 5.0), (0.0, 9.0), (0.0, 9.0), 0.8, True),  # pulled short along the line, whatever the prediction
@@ -330,6 +344,7 @@ def test_the_whole_view_check_keeps_tracks_that_agree_with_it():
     frames = [_moved(image, 2.5 * k, -3.0 * k, centre=(200.0, 200.0)) for k in range(6)]
     measured = [flow.track(flow.prepare(f[100:300, 100:300], cv2.resize(f, (200, 200), interpolation=cv2.INTER_AREA)))
                 for f in frames][1:]
-    assert not any(m.quality.overview for m in measured) and all(m.quality.kept > 50 for m in measured)
+    assert not any(m.quality.overview or m.quality.disagreed for m in measured)
+    assert all(m.quality.kept > 50 for m in measured)
     for m in measured:
         np.testing.assert_allclose(m.median, [2.5, -3.0], atol=0.05)

@@ -229,6 +229,30 @@ def test_floor_steps_without_inliers_are_not_fused():
     assert offered.refused == 1
 
 
+def test_a_floor_step_in_doubt_is_not_fused_and_the_camera_biases_are_forgotten():
+    """A step whose spread is infinite (its tracks and the whole view disagreed) is left out like a flagged one, and
+    the tracker's scale error learned from the floor before it goes back to the prior: zero, the prior's sigma."""
+    floor = _arc_path(30.0, sigma=(0.003, 0.01), seed=1)
+    tracker = _arc_path(200.0, sigma=(0.02, 0.02), scale=1.03, seed=2)
+    spread = np.full(len(floor), np.nan)
+    trusted = fuse(floor, _measured(floor), tracker, FusionSettings(), spread)
+    assert abs(trusted.biases[-1, 0] - 0.03) < 0.01  # the 3 % scale error, learned from the floor
+    spread[-1] = np.inf
+    doubted = fuse(floor, _measured(floor), tracker, FusionSettings(), spread)
+    inliers = _measured(floor)
+    inliers[-1] = 0
+    left_out = fuse(floor, inliers, tracker, FusionSettings(), np.full(len(floor), np.nan))
+    np.testing.assert_allclose(doubted.biases[:-1], trusted.biases[:-1], rtol=0, atol=1e-15)
+    # forgotten: back to the prior but for the camera's last step, fused after the floor's (scale 0.0024), while the
+    # step merely left out keeps what was learned
+    assert abs(doubted.biases[-1, 0]) < 0.2 * trusted.biases[-1, 0] < left_out.biases[-1, 0]
+    sigma = np.sqrt(np.diag(doubted.covariances[-1])[5:])
+    prior = [FusionSettings().tracking_scale_sigma, FusionSettings().tracking_yaw_bias_sigma_radps]
+    np.testing.assert_allclose(sigma, prior, rtol=0.2)  # measured 0.043 and 0.00495
+    assert (np.sqrt(np.diag(trusted.covariances[-1])[5:]) < 0.5 * np.array(prior)).all()
+    assert doubted.dropped == {"floor: step in doubt (tracks and whole view disagree), not fused": 1}
+
+
 def test_repeated_and_out_of_order_tracker_stamps_are_skipped():
     floor = _arc_path(30.0, sigma=(0.003, 0.01), seed=1)
     tracker = _arc_path(200.0, sigma=(0.02, 0.02), seed=2)

@@ -156,7 +156,7 @@ class OdometryFusion:
         self._filter.x[AUGMENTED:] = np.tile(np.asarray(pose, dtype=float), len(sources))
         self._filter.P = np.zeros((size, size))
         self._filter.P[3:5, 3:5] = np.eye(2)  # the pose is the given one, the motion unknown
-        self._filter.P[5, 5], self._filter.P[6, 6] = biases.scale_sigma**2, biases.yaw_bias_sigma_radps**2
+        self.forget_biases()  # the biases start at their prior
         self._fresh_jitter(JITTER)
         self._clones = {name: (AUGMENTED + 3 * k, self.time_s) for k, name in enumerate(sources)}
         self._jitter = 1e-12 * np.eye(size)  # added to the covariance before _check's Cholesky factorisation
@@ -228,6 +228,15 @@ class OdometryFusion:
         self._clone(source)
         self._check()
         return fused
+
+    def forget_biases(self) -> None:
+        """Put the calibrated source's biases back to their prior (``BiasModel``): zero, with the prior's variances,
+        uncorrelated with the rest of the state."""
+        ekf = self._filter
+        ekf.x[BIASES] = 0.0
+        ekf.P[BIASES, :] = 0.0
+        ekf.P[:, BIASES] = 0.0
+        ekf.P[5, 5], ekf.P[6, 6] = self.biases.scale_sigma**2, self.biases.yaw_bias_sigma_radps**2
 
     def _update(self, index: int, increment, covariance, biased_dt: float | None) -> bool:
         """Fuse one increment against the clone at ``index``; ``biased_dt``: the step's seconds when the source is

@@ -487,11 +487,12 @@ class FeatureMatches:
     seconds: dict
 
     @property
-    def counts(self) -> tuple[int, int, int, float, int, bool]:
-        """(matches, kept, kept, NaN, 0, False): a frame's record's counts (tracked, kept, inliers, spread in pixels,
-        slower vectors, whole-view check), as for a KLT flow (``gpo.motion.klt.FlowMeasurement.counts``)."""
+    def counts(self) -> tuple[int, int, int, float, int, bool, bool]:
+        """(matches, kept, kept, NaN, 0, False, False): a frame's record's counts (tracked, kept, inliers, spread in
+        pixels, slower vectors, whole-view check, in doubt), as for a KLT flow
+        (``gpo.motion.klt.FlowMeasurement.counts``)."""
         kept = int(self.kept.sum())
-        return len(self.pairs), kept, kept, math.nan, 0, False
+        return len(self.pairs), kept, kept, math.nan, 0, False, False
 
     @property
     def histogram_kept(self) -> np.ndarray:

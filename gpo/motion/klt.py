@@ -36,7 +36,7 @@ break Lucas-Kanade's constant brightness). Pixels (u, v): u right, v down, as Op
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -44,7 +44,7 @@ import numpy as np
 from gpo.motion.keyframes import FRAME_TO_FRAME, KeyframePolicy
 from gpo.motion.layers import slower_count, slower_layer
 from gpo.motion.median import median_of
-from gpo.motion.overview import Overview, OverviewShift, replaces_median
+from gpo.motion.overview import Overview, OverviewShift, disagrees, replaces_median
 from gpo.motion.ranges import check_rules, in_range
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
@@ -162,7 +162,9 @@ class FlowQuality:
     pixels; ``flag``: None when the frame is measured, else why it is not; ``slower``: kept vectors moving along
     the median at under ``SLOWER_SPEED`` of its length, once it is ``SLOWER_MIN_PX`` long (a slower layer, such
     as reflections; see the module); ``overview``: the frame's motion is the whole-view check's
-    (``gpo.motion.overview``), the tracks having disagreed with it.
+    (``gpo.motion.overview``), the tracks having disagreed with it; ``disagreed``: the tracks and the whole-view
+    check disagreed (``gpo.motion.overview.disagrees``), or the check measured a flagged frame: whichever measured
+    it, the frame's motion is in doubt (the fused route does not fuse it, ``gpo.fusion.streaming``).
     """
 
     tracked: int
@@ -172,6 +174,7 @@ class FlowQuality:
     flag: str | None = None
     slower: int = 0
     overview: bool = False
+    disagreed: bool = False
 
     @property
     def ok(self) -> bool:
@@ -210,11 +213,11 @@ class FlowMeasurement:
         return self.quality.flag
 
     @property
-    def counts(self) -> tuple[int, int, int, float, int, bool]:
-        """(tracked, kept, inliers, spread in pixels, vectors in a slower layer, measured by the whole-view check),
-        as a frame's record holds them."""
+    def counts(self) -> tuple[int, int, int, float, int, bool, bool]:
+        """(tracked, kept, inliers, spread in pixels, vectors in a slower layer, measured by the whole-view check,
+        in doubt), as a frame's record holds them."""
         q = self.quality
-        return q.tracked, q.kept, q.inliers, q.spread_px, q.slower, q.overview
+        return q.tracked, q.kept, q.inliers, q.spread_px, q.slower, q.overview, q.disagreed
 
 
 @dataclass(frozen=True, eq=False)
@@ -409,12 +412,14 @@ class FloorFlow:
         points."""
         p = self.parameters
         if not replaces_median(moved, measurement.flag, found, predicted, p.overview_tolerance_px, p.overview_min_peak):
+            if measurement.flag is None and disagrees(moved, found, p.overview_tolerance_px, p.overview_min_peak):
+                return replace(measurement, quality=replace(measurement.quality, disagreed=True))
             return measurement
         width, height = self._size
         u, v = np.meshgrid(*(np.linspace(0.25, 0.75, OVERVIEW_GRID) * (side - 1) for side in (width, height)))
         start = np.column_stack([u.ravel(), v.ravel()]).astype(np.float32)
         shift, count = found.shift_px, len(start)
-        quality = FlowQuality(count, count, count, float("nan"), overview=True)  # NaN: the fusion's reference spread
+        quality = FlowQuality(count, count, count, float("nan"), overview=True, disagreed=True)
         return FlowMeasurement(start, start + shift.astype(np.float32), shift, shift, np.ones(count, bool), quality)
 
     def _check(self, image: np.ndarray) -> None:

@@ -74,6 +74,13 @@ def pulled_short(median: np.ndarray, shift_px: np.ndarray, tolerance_px: float) 
     return float(median @ along) < length - tolerance_px and beside <= tolerance_px
 
 
+def disagrees(median: np.ndarray, overview: OverviewShift, tolerance_px: float, min_peak: float) -> bool:
+    """Whether the overview's shift, its correlation's peak reaching ``min_peak``, lies more than ``tolerance_px``
+    from the flow's ``median`` (floor-image pixels): one of the two misreads the floor, and the frame's motion is in
+    doubt whichever measures it."""
+    return overview.peak >= min_peak and float(np.hypot(*(median - overview.shift_px))) > tolerance_px
+
+
 def replaces_median(
     median: np.ndarray | None,
     flag: str | None,
@@ -90,8 +97,8 @@ def replaces_median(
         return False
     if flag is not None:
         return True
-    shift = overview.shift_px
-    if np.hypot(*(median - shift)) <= tolerance_px:
+    if not disagrees(median, overview, tolerance_px, min_peak):
         return False
+    shift = overview.shift_px
     nearer = float(np.hypot(*(shift - predicted))) < float(np.hypot(*(median - predicted)))
     return pulled_short(median, shift, tolerance_px) or nearer

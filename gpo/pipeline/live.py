@@ -62,8 +62,8 @@ class LiveOdometer:
         record. With ``fused``, the frames this settles go to ``on_fused``."""
         record = self.floor.step(stamp_ns, image)
         if self.fusion is not None and record.status is not Status.SKIPPED:
-            inliers = record.inliers if record.status is Status.MEASURED else 0
-            self._keep(self.fusion.add_floor(stamp_ns * 1e-9, record.pose, inliers, record.spread_px))
+            self._keep(self.fusion.add_floor(stamp_ns * 1e-9, record.pose, record.fused_inliers,
+                                             record.fused_spread_px))
         return record
 
     def track(self, stamp_ns: int, position, orientation) -> None:

@@ -67,8 +67,9 @@ class OtherSize(Unreadable):
 class FrameRecord:
     """One frame: header stamp (ns), base_link's ``pose`` (x, y, theta) in odom after it, the flow's counts
     (tracked, kept, inliers, spread in pixels), ``status`` (measured, coasted, held, skipped, first), the
-    ``flag`` saying why when not measured, ``slower``: the kept vectors in a slower layer (``gpo.motion.klt``), and
-    ``overview``: whether the whole-view check measured the frame (``gpo.motion.overview``)."""
+    ``flag`` saying why when not measured, ``slower``: the kept vectors in a slower layer (``gpo.motion.klt``),
+    ``overview``: whether the whole-view check measured the frame (``gpo.motion.overview``), and ``disagreed``:
+    whether the tracks and that check disagreed, the frame's motion in doubt (``gpo.motion.klt.FlowQuality``)."""
 
     stamp_ns: int
     pose: tuple[float, float, float]
@@ -80,9 +81,21 @@ class FrameRecord:
     flag: str | None = None
     slower: int = 0
     overview: bool = False
+    disagreed: bool = False
 
     def __post_init__(self):
         object.__setattr__(self, "status", Status(self.status))  # a status given by its name, as a member
+
+    @property
+    def fused_inliers(self) -> int:
+        """The inliers the fusion reads for the step into this frame: 0 (not fused) unless it was measured."""
+        return self.inliers if self.status is Status.MEASURED else 0
+
+    @property
+    def fused_spread_px(self) -> float:
+        """The spread the fusion reads for the step into this frame (pixels): infinite where its motion is in doubt
+        (``disagreed``: the fusion then does not fuse it, ``gpo.fusion.streaming``), NaN where unknown."""
+        return math.inf if self.disagreed else self.spread_px
 
 
 class FloorOdometer:
@@ -225,6 +238,6 @@ class FloorOdometer:
     def _record(self, stamp_ns, measurement, status, flag=None) -> FrameRecord:
         if status is not Status.SKIPPED and self.motion.keyframe_is_latest:  # the next frame is measured from this one
             self._keyframe = (int(stamp_ns), self.pose)  # step replaces the pose array, never changes it in place
-        counts = (0, 0, 0, math.nan, 0, False) if measurement is None else measurement.counts
+        counts = (0, 0, 0, math.nan, 0, False, False) if measurement is None else measurement.counts
         pose = tuple(float(v) for v in self.pose)
-        return FrameRecord(int(stamp_ns), pose, *counts[:4], status, flag, counts[4], counts[5])
+        return FrameRecord(int(stamp_ns), pose, *counts[:4], status, flag, *counts[4:])

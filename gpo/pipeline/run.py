@@ -44,7 +44,8 @@ from gpo.pipeline.odometer import FloorOdometer, FrameRecord, Status, Unreadable
 class FloorRun:
     """A floor run's path of base_link in odom (``trajectory``) at every frame not skipped, the flow's inlier tracks
     behind each of its steps (``inliers``: 0 where the step was coasted, held or first), the run's frames per second,
-    and the inliers' spread behind each step (``spread_px``, pixels: NaN where unknown; None when not kept)."""
+    and the inliers' spread behind each step (``spread_px``, pixels: NaN where unknown, infinite where the step is in
+    doubt, ``FrameRecord.fused_spread_px``; None when not kept)."""
 
     trajectory: Trajectory
     inliers: np.ndarray
@@ -141,8 +142,8 @@ class OdometryResult:
     def floor_run(self) -> FloorRun:
         """The floor odometry as the EKF reads it (``gpo.fusion.fuse``): its path, each step's inliers and spread."""
         kept = [r for r in self.records if r.status is not Status.SKIPPED]
-        inliers = np.array([r.inliers if r.status is Status.MEASURED else 0 for r in kept])
-        spread = np.array([r.spread_px for r in kept])
+        inliers = np.array([r.fused_inliers for r in kept])
+        spread = np.array([r.fused_spread_px for r in kept])
         return FloorRun(self.floor_trajectory, inliers, self.frames_per_second, spread)
 
     def summary(self) -> dict:
