@@ -40,6 +40,7 @@ from gpo.io.bag import Recording
 from gpo.io.fingerprint import sources
 from gpo.io.trajectory import Trajectory
 from gpo.metrics import PaperTable2, evaluate, paper_table2
+from gpo.motion.keyframes import FRAME_TO_FRAME
 from gpo.pipeline.config import OdometryConfig, config_to_dict, load_config
 from gpo.pipeline.odometer import FloorOdometer
 from gpo.pipeline.run import FloorRun, OdometryResult
@@ -97,13 +98,14 @@ SUITE_CHANGES = (
     ("band floor", {"band_floor_px": 0.0}),
     ("short sides pass", {"short_side_px": 0.0}),
     ("refit", {"refit_px": 0.0}),
+    ("keyframes", {"keyframe": FRAME_TO_FRAME}),
 )
 """The suite's changes to the paper's method, in the order the ablation adds them, each with the feature settings
 that undo it (the paper's): SIFT on the image halved in a region of interest (the paper: the full image), Lowe's
 ratio test (the paper: the nearest descriptor), the orientation histogram about the vectors' circular mean with
 short vectors passing (the paper: the joining line's orientation over 0-180 degrees, every vector binned), the
 bands' floor (the paper: mu +- sigma alone), loop sides too short to judge passing (the paper: every side judged),
-and the refit (the paper: one fit)."""
+the refit (the paper: one fit) and keyframes (the paper: every frame matched with the one before)."""
 
 
 def published_config(base: OdometryConfig | None = None) -> OdometryConfig:

@@ -8,8 +8,9 @@ it is still in view, the same error is made once per keyframe: the frames in bet
 keyframe, and their errors do not add up. A new keyframe is the frame whose measurement left too little of the
 keyframe in view, or the last one the policy allows.
 
-The tracker (``gpo.motion.klt.FloorFlow``) applies the policy; ``gpo.pipeline.odometer.FloorOdometer`` composes each
-measured pose onto the keyframe's. ``max_frames: 1`` is frame-to-frame tracking, the first paper's.
+The trackers (``gpo.motion.klt.FloorFlow``, ``gpo.motion.keypoints.FeatureTracker``) apply the policy;
+``gpo.pipeline.odometer.FloorOdometer`` composes each measured pose onto the keyframe's. ``max_frames: 1`` is
+frame-to-frame tracking, the papers'.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ from gpo.motion.ranges import in_range
 class KeyframePolicy:
     """How long a keyframe is kept: the frames after it are measured against it while at least ``min_overlap`` of its
     corners are still followed into the frame (a share, 0-1: the floor it shares with the frame, less the tracks lost
-    to noise), for at most ``max_frames`` frames (1: every frame against the one before, frame-to-frame)."""
+    to noise; for keypoints, of the matches kept in the first frame after it), for at most ``max_frames`` frames (1:
+    every frame against the one before, frame-to-frame)."""
 
     min_overlap: float = 0.6
     max_frames: int = 30

@@ -45,11 +45,12 @@ from __future__ import annotations
 import math
 import numbers
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
 
+from gpo.motion.keyframes import FRAME_TO_FRAME, KeyframePolicy
 from gpo.motion.ranges import MAX_IMAGE_PX, OutOfRange, check_rules, in_range
 
 DETECTORS = ("orb", "sift")
@@ -106,6 +107,9 @@ class FeatureParameters:
     many pixels of its partner (0: the paper's fit alone). ``seed``: the invariance check's random generator.
     The suite's rules beside the paper's (``histogram_filter``, ``invariance_check``; each off gives the paper's):
     ``circular_binning``, ``band_floor_px`` (0: plain mu +- sigma) and ``short_side_px`` (0: every side judged).
+    ``keyframe``: how long the frames after a keyframe are matched with it instead of with the frame before them
+    (``gpo.motion.keyframes``; the share is of the kept matches of the first frame matched with it); the paper's is
+    ``FRAME_TO_FRAME``, every frame matched with the one before.
     """
 
     detector: str = "orb"
@@ -129,10 +133,13 @@ class FeatureParameters:
     circular_binning: bool = True
     band_floor_px: float = LOCALISATION_PX
     short_side_px: float = SHORT_SIDE_PX
+    keyframe: KeyframePolicy = field(default=FRAME_TO_FRAME)
 
     def __post_init__(self):
         if isinstance(self.roi, list):  # as YAML gives it
             object.__setattr__(self, "roi", tuple(self.roi))
+        if isinstance(self.keyframe, dict):
+            object.__setattr__(self, "keyframe", KeyframePolicy(**self.keyframe))
         check_rules(self._rules(), self, FeatureParametersOutOfRange)
 
     def _rules(self) -> dict[str, tuple[bool, str]]:
@@ -168,6 +175,7 @@ class FeatureParameters:
             "seed": (_whole(self.seed, 0), "a whole number >= 0"),
             "band_floor_px": in_range(self.band_floor_px, 0, 100, " px (0: plain mu +- sigma)"),
             "short_side_px": in_range(self.short_side_px, 0, 100, " px (0: every side judged)"),
+            "keyframe": (isinstance(self.keyframe, KeyframePolicy), "a keyframe policy: min_overlap and max_frames"),
         }
 
 
@@ -485,6 +493,7 @@ class FeatureMatches:
     kept: np.ndarray
     flag: str | None
     seconds: dict
+    from_previous: bool = False
 
     @property
     def counts(self) -> tuple[int, int, int, float, int, bool, bool]:
@@ -520,37 +529,60 @@ class FeatureMatches:
 
 
 class FeatureTracker:
-    """Matches each frame's keypoints with the previous frame's. ``track(image, mask)`` returns the pair's
-    ``FeatureMatches`` (None for the first frame); each image is detected once, its keypoints serving as the next
-    frame's previous ones. ``follow(keypoints)`` does the same with keypoints already detected, so that settings
-    of the matching and the filters can be compared on one detection. ``restart()`` forgets the previous frame. The
-    invariance check draws from one generator, ``np.random.default_rng(parameters.seed)``, made here: the same
-    frames give the same matches."""
+    """Matches each frame's keypoints with a keyframe's: the frame before it, or with ``parameters.keyframe`` an earlier
+    frame kept while enough of its matches hold (``gpo.motion.keyframes``). ``track(image, mask)`` returns the pair's
+    ``FeatureMatches`` (None for the first frame); each image is detected once, its keypoints serving the frames
+    after it. ``follow(keypoints)`` does the same with keypoints already detected, so that settings of the matching
+    and the filters can be compared on one detection. ``restart()`` forgets the frames before. The invariance check
+    draws from one generator, ``np.random.default_rng(parameters.seed)``, made here: the same frames give the same
+    matches.
+
+    A frame matched with a keyframe that keeps fewer than ``min_overlap`` of the matches its first frame kept (or is
+    flagged) is matched again with the frame before it (``FeatureMatches.from_previous``) and becomes the keyframe:
+    a keyframe half out of view leaves few matches, and a fit on few, on a glossy floor partly the reflections', turns
+    the heading by a degree at once. The keyframe is also renewed after ``max_frames`` frames."""
 
     def __init__(self, parameters: FeatureParameters | None = None):
         self.parameters = parameters if parameters is not None else FeatureParameters()
         self._rng = np.random.default_rng(self.parameters.seed)
         self._previous: Keypoints | None = None
+        self._keyframe: Keypoints | None = None
+        self._frames = 0  # frames matched with the keyframe so far
+        self._first_kept = 0  # matches kept by the first of them
 
     def restart(self) -> None:
-        """Forget the previous frame: the next ``track`` call starts afresh."""
-        self._previous = None
+        """Forget the frames before: the next ``track`` call starts afresh."""
+        self._previous = self._keyframe = None
+        self._frames = 0
 
     @property
     def keyframe_is_latest(self) -> bool:
-        """Always True: each frame is matched with the one before it (``gpo.motion.klt.FloorFlow`` has keyframes)."""
-        return True
+        """Whether the next frame is matched with the latest one (the latest frame is the keyframe)."""
+        return self._frames == 0
 
     def track(self, image: np.ndarray, mask=None) -> FeatureMatches | None:
-        """The matches from the previous frame to ``image`` (H, W) uint8, ``mask`` as for ``detect``."""
+        """The matches from the keyframe to ``image`` (H, W) uint8, ``mask`` as for ``detect``."""
         seconds = {}
         current = _timed(seconds, "detect", detect, image, self.parameters, mask)
         return self.follow(current, seconds)
 
     def follow(self, current: Keypoints, seconds: dict | None = None) -> FeatureMatches | None:
-        """The matches from the previous frame's keypoints to ``current`` (None for the first frame)."""
-        previous, self._previous = self._previous, current
-        return None if previous is None else self.matches(previous, current, seconds)
+        """The matches from the keyframe's keypoints to ``current`` (None for the first frame)."""
+        keyframe, previous, self._previous = self._keyframe, self._previous, current
+        if keyframe is None:
+            self._keyframe, self._frames = current, 0
+            return None
+        measured = self.matches(keyframe, current, seconds)
+        kept, frames, policy = int(measured.kept.sum()), self._frames + 1, self.parameters.keyframe
+        first = kept if frames == 1 else self._first_kept
+        holds = measured.flag is None and kept >= policy.min_overlap * first
+        if frames > 1 and not holds:  # too little of the keyframe left: from the frame before, the new keyframe
+            measured = replace(self.matches(previous, current, seconds), from_previous=True)
+        if holds and policy.keeps(kept, first, frames):
+            self._frames, self._first_kept = frames, first
+        else:
+            self._keyframe, self._frames = current, 0
+        return measured
 
     def matches(self, previous: Keypoints, current: Keypoints, seconds: dict | None = None) -> FeatureMatches:
         """Match two frames' keypoints and filter the matches with the stages the parameters switch on, stopping

@@ -213,6 +213,12 @@ class FlowMeasurement:
         return self.quality.flag
 
     @property
+    def from_previous(self) -> bool:
+        """Whether the motion was measured from the frame before, not from the keyframe (the whole-view check's
+        shift, ``gpo.motion.overview``)."""
+        return self.quality.overview
+
+    @property
     def counts(self) -> tuple[int, int, int, float, int, bool, bool]:
         """(tracked, kept, inliers, spread in pixels, vectors in a slower layer, measured by the whole-view check,
         in doubt), as a frame's record holds them."""

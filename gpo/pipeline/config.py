@@ -7,7 +7,7 @@ file into the stages' parameters and back.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields
 from enum import StrEnum
 from importlib import resources
 from pathlib import Path
@@ -174,7 +174,7 @@ def config_to_dict(config: OdometryConfig) -> dict:
         },
         "odometry": {"method": str(config.method), "vector": config.vector, "max_gap_s": config.max_gap_s},
         "fusion": config.fusion.to_dict(),
-        "features": {f.name: getattr(config.features, f.name) for f in fields(config.features)},
+        "features": asdict(config.features),
     }
 
 

@@ -106,7 +106,8 @@ class FloorOdometer:
     (``gpo.odometry.estimators``) turns it into the increment since the frame the motion was measured from, composed
     onto that frame's pose. For an estimator that reads ``KEYFRAMES``, that frame is the KLT flow's keyframe (the
     config's ``keyframe`` policy), so that the errors of the frames in between do not add up; else the previous
-    frame."""
+    frame. The keypoints are matched with their own keyframe (the ``features`` section's ``keyframe`` policy). A
+    measurement made from the frame before instead (``from_previous``) is composed onto that frame's pose."""
 
     def __init__(self, config: OdometryConfig):
         self.config = config
@@ -211,7 +212,7 @@ class FloorOdometer:
         measurement = self._track(image, stamp_ns)
         if measurement.flag is not None:
             return self._coast(stamp_ns, dt, measurement, measurement.flag)
-        if isinstance(measurement, FlowMeasurement) and measurement.quality.overview:  # from the previous frame
+        if measurement.from_previous:  # measured from the frame before, not from the keyframe
             keyframe_ns, keyframe_pose = previous, self.pose
         increment, why = self.estimator.increment(measurement, (stamp_ns - keyframe_ns) * 1e-9)
         if increment is None:
