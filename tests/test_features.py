@@ -12,6 +12,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from gpo.floor_image.image import FloorImage
+from gpo.motion.keyframes import FRAME_TO_FRAME, KeyframePolicy
 from gpo.motion.keypoints import (
     SUPPORT_PER_SIZE,
     FeatureError,
@@ -392,6 +393,41 @@ def test_follow_on_detected_keypoints_is_track_on_the_images():
     np.testing.assert_array_equal(by_image.kept, by_keypoints.kept)  # the invariance check drew the same loops
 
 
+
+def _slid(count: int, step_px: float, keyframe: KeyframePolicy) -> tuple[list[np.ndarray], list[FeatureMatches]]:
+    """A floor slid ``step_px`` to the right each frame for ``count`` frames, followed by a tracker of ORB keypoints
+    under ``keyframe``: each frame's keypoints, and each frame's matches after the first."""
+    image, parameters = _floor(8), FeatureParameters(detector="orb", keyframe=keyframe)
+    tracker = FeatureTracker(parameters)
+    frames = [detect(_moved(image, 0.0, (k * step_px, 0.0))[0], parameters) for k in range(count)]
+    assert tracker.follow(frames[0]) is None
+    return frames, [tracker.follow(frame) for frame in frames[1:]]
+
+
+def test_frames_are_matched_with_the_keyframe_until_its_last_frame():
+    frames, measured = _slid(6, 3.0, KeyframePolicy(min_overlap=0.5, max_frames=3))
+    assert [m.previous for m in measured] == [frames[0], frames[0], frames[0], frames[3], frames[3]]
+    assert not any(m.from_previous for m in measured)
+    for k, m in enumerate(measured, start=1):  # each measurement spans the frames since its keyframe
+        since = k - (3 if k > 3 else 0)
+        assert np.median(m.end[:, 0] - m.start[:, 0]) == pytest.approx(3.0 * since, abs=0.3)
+
+
+def test_a_frame_that_keeps_too_little_of_the_keyframe_is_matched_with_the_frame_before():
+    """A 320 px wide floor slid 70 px a frame: two frames from the keyframe share less than half its width."""
+    frames, measured = _slid(4, 70.0, KeyframePolicy(min_overlap=0.8, max_frames=30))
+    first, second, third = measured
+    assert first.previous is frames[0] and not first.from_previous
+    assert second.previous is frames[1] and second.from_previous  # measured again, from the frame before
+    assert third.previous is frames[2]  # the frame measured again became the keyframe
+    assert np.median(second.end[:, 0] - second.start[:, 0]) == pytest.approx(70.0, abs=0.5)
+
+
+def test_frame_to_frame_matches_every_frame_with_the_one_before():
+    frames, measured = _slid(4, 3.0, FRAME_TO_FRAME)
+    assert [m.previous for m in measured] == frames[:-1]
+    assert FeatureParameters().keyframe == FRAME_TO_FRAME  # the paper's tracking unless a config asks for keyframes
+
 @pytest.mark.parametrize(
     ("detector", "field", "lower"), [("sift", "contrast_threshold", 0.01), ("orb", "fast_threshold", 5)]
 )
@@ -478,6 +514,7 @@ def test_bad_images_are_refused_clearly():
         ("fast_threshold", 256),
         ("orientation_bins", 100_000),
         ("refit_px", 1e30),
+        ("keyframe", "often"),
     ],
 )
 def test_bad_parameters_name_the_field(field, value):

@@ -50,8 +50,8 @@ def test_the_floor_image_route_follows_the_truth_too(wood):
     config = load_config(CONFIG)
     on_floor_image = config.replace(route="analytic", features=dataclasses.replace(config.features, roi=None))
     result = run(bag, on_floor_image, progress=False)
-    # measured 0.006 % (0.3 mm; 0.007 % on the sse4 path): a bound of about twice that
-    assert final_error(result.trajectory, truth).percent < 0.015
+    # measured 0.017 % (0.7 mm) with the shipped keyframes, 0.006 % frame to frame: a bound of about twice that
+    assert final_error(result.trajectory, truth).percent < 0.035
 
 
 def test_keypoints_detected_beforehand_give_the_same_path(wood):
