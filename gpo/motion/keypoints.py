@@ -1,3 +1,5 @@
+# long: one job, the second paper's image work in the order chapter 08 reads it (keypoints, matches, both filters, the
+# tracker), each step tied to the paper in its docstring
 """How the floor moves between two frames, from matched keypoints: the second paper's floor feature odometer.
 
 Chapter 08. The second paper's AGV carries a monocular pinhole camera that looks straight down at the floor. Each
