@@ -291,7 +291,12 @@ def seen_after(points_m, increment) -> np.ndarray:
 def increment_from_point_pairs(start_m, end_m, weights=None) -> np.ndarray:
     """The increment (dx, dy, dtheta) of a frame in which floor points seen at ``start_m`` (N, 2) in base_link are
     seen at ``end_m`` (N, 2) at its end: the floor moved by the inverse of the robot's motion, end = T^-1 start."""
-    angle, translation = rigid_fit(start_m, end_m, weights)
+    return increment_from_floor_motion(*rigid_fit(start_m, end_m, weights))
+
+
+def increment_from_floor_motion(angle: float, translation) -> np.ndarray:
+    """The increment (dx, dy, dtheta) of a frame over which the floor moved rigidly, end = R(``angle``) start +
+    ``translation`` (rad; (2,), metres, base_link): the inverse of that motion."""
     cos, sin = np.cos(angle), np.sin(angle)
     back = -np.array([cos * translation[0] + sin * translation[1], -sin * translation[0] + cos * translation[1]])
     return np.array([back[0], back[1], -angle])

@@ -19,6 +19,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
+import cv2
 import numpy as np
 
 from gpo.cameras import CameraModel
@@ -116,3 +117,14 @@ def vector_motion(
         starts, vectors = starts[tracks], vectors[tracks]
     middle = median_of if statistic == "median" else np.mean
     return geometry.metres(median_of(starts, axis=0)), geometry.vector_metres(middle(vectors, axis=0))
+
+
+def agreeing(start_m: np.ndarray, end_m: np.ndarray, threshold_m: float) -> np.ndarray | None:
+    """Which pairs of ``start_m`` and ``end_m`` (N, 2), metres, agree on one rigid motion of the floor: the inliers
+    (N,) of a RANSAC fit of a rotation, translation and scale, each landing within ``threshold_m`` of where the
+    fit puts it; None when no fit is found. A few gross mismatches (a keypoint matched to another's twin, 100 px
+    off) pull a least-squares fit by degrees; RANSAC leaves them out."""
+    _, inliers = cv2.estimateAffinePartial2D(
+        start_m, end_m, method=cv2.RANSAC, ransacReprojThreshold=threshold_m, maxIters=200, confidence=0.995
+    )
+    return None if inliers is None else inliers.ravel().astype(bool)

@@ -1,15 +1,16 @@
 """``features``: the second paper's rigid 2-D transform (theta, Tx, Ty, its eqs. 3-4) of the kept keypoint matches in
 metres as the robot's increment, fitted again on every match it explains (``refit``, the suite's addition), from
-the paper's fit or the turn the matches share about the kept matches' centre (``turn_about_kept``), whichever
-explains more of them."""
+the paper's fit, the turn the matches share about the kept matches' centre (``turn_about_kept``) or the fit on the
+kept matches that agree on one motion (``agreeing``: a few gross mismatches the filters let through turn a
+least-squares fit by degrees), whichever explains most of them."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from gpo.motion.keypoints import FeatureError
-from gpo.odometry.estimators.base import FloorEstimator
-from gpo.odometry.kinematics import increment_from_point_pairs, seen_after
+from gpo.odometry.estimators.base import FloorEstimator, agreeing
+from gpo.odometry.kinematics import increment_from_floor_motion, increment_from_point_pairs, seen_after
 
 REFIT_ROUNDS = 5  # at most this many fits in ``refit``
 
@@ -77,9 +78,7 @@ def turn_about_kept(start, end, kept, min_lever: float) -> np.ndarray | None:
     turns = np.arctan2(before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0], (before * after).sum(axis=1))
     angle = float(np.median(turns))  # end = R(angle) start + t, as rigid_fit's
     cos, sin = np.cos(angle), np.sin(angle)
-    translation = centre_end - np.array([[cos, -sin], [sin, cos]]) @ centre_start
-    back = -np.array([cos * translation[0] + sin * translation[1], -sin * translation[0] + cos * translation[1]])
-    return np.array([back[0], back[1], -angle])
+    return increment_from_floor_motion(angle, centre_end - np.array([[cos, -sin], [sin, cos]]) @ centre_start)
 
 
 class RigidKeypoints(FloorEstimator):
@@ -99,7 +98,10 @@ class RigidKeypoints(FloorEstimator):
             tolerance = parameters.refit_px * self.geometry.pixel_m
             start, end, kept = start[on_floor], end[on_floor], kept[on_floor]
             turned = turn_about_kept(start, end, kept, TURN_LEVER_PX * self.geometry.pixel_m)
-            firsts = [increment] if turned is None else [increment, turned]
+            agree = agreeing(start[kept], end[kept], tolerance)
+            firsts = [increment] + [turned] * (turned is not None)
+            if agree is not None and agree.sum() >= parameters.min_matches:
+                firsts.append(increment_from_point_pairs(start[kept][agree], end[kept][agree]))
             first = max(firsts, key=lambda candidate: explained(start, end, candidate, tolerance).sum())
             increment = refit(start, end, first, tolerance, parameters.min_matches)
         return increment, None

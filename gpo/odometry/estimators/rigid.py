@@ -6,10 +6,9 @@ axle instead, as ``gpo-exact`` does."""
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 
-from gpo.odometry.estimators.base import FloorEstimator, vector_motion
+from gpo.odometry.estimators.base import FloorEstimator, agreeing, vector_motion
 from gpo.odometry.kinematics import increment_from_point_motion, increment_from_point_pairs
 
 RANSAC_THRESHOLD_PX = 1.0  # a track fits the rigid motion when it lands this close to where the motion puts it
@@ -28,10 +27,7 @@ class RigidFit(FloorEstimator):
             return increment_from_point_motion(where, where + moved), None
         start, end = self.geometry.metres(measurement.start), self.geometry.metres(measurement.end)
         threshold = RANSAC_THRESHOLD_PX * self.geometry.pixel_m
-        _, inliers = cv2.estimateAffinePartial2D(
-            start, end, method=cv2.RANSAC, ransacReprojThreshold=threshold, maxIters=200, confidence=0.995
-        )
-        if inliers is None or inliers.sum() < self.config.klt.min_tracks:
+        chosen = agreeing(start, end, threshold)
+        if chosen is None or chosen.sum() < self.config.klt.min_tracks:
             return None, "rigid fit: too few tracks agree"
-        chosen = inliers.ravel().astype(bool)
         return increment_from_point_pairs(start[chosen], end[chosen]), None
