@@ -456,6 +456,18 @@ def test_a_frame_that_keeps_too_little_of_the_keyframe_is_matched_with_the_frame
     assert np.median(second.end[:, 0] - second.start[:, 0]) == pytest.approx(70.0, abs=0.5)
 
 
+def test_a_frame_matched_twice_reports_both_matchings_times(monkeypatch):
+    """Each stage timed as one second: the frame matched again with the frame before took two of matching, two of
+    each filter, and the frames matched once one."""
+    clock = iter(range(1000))
+    monkeypatch.setattr("gpo.motion.keypoints.time.perf_counter", lambda: float(next(clock)))
+    _, measured = _slid(4, 70.0, KeyframePolicy(min_overlap=0.8, max_frames=30))
+    first, second, _ = measured
+    assert second.from_previous and not first.from_previous
+    assert second.seconds == {"match": 2.0, "histogram": 2.0, "invariance": 2.0}
+    assert first.seconds == {"match": 1.0, "histogram": 1.0, "invariance": 1.0}
+
+
 def test_frame_to_frame_matches_every_frame_with_the_one_before():
     frames, measured = _slid(4, 3.0, FRAME_TO_FRAME)
     assert [m.previous for m in measured] == frames[:-1]

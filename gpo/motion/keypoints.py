@@ -485,7 +485,8 @@ class FeatureMatches:
     matches ``pairs`` (M, 2) after the ratio test and cross check, the stages' work (``histogram``: the orientation
     and length stages; ``invariance``; None when off or not reached), the matches ``kept`` (M,) by every stage that
     ran, the ``flag`` (None when measured, else why not) and the wall time in ``seconds`` of each stage that ran
-    ("detect": the current frame's keypoints, "match", "histogram", "invariance")."""
+    ("detect": the current frame's keypoints, "match", "histogram", "invariance"; for a frame matched again with the
+    frame before, ``from_previous``, both matchings' times)."""
 
     previous: Keypoints
     current: Keypoints
@@ -579,7 +580,7 @@ class FeatureTracker:
         first = kept if frames == 1 else self._first_kept
         holds = measured.flag is None and kept >= policy.min_overlap * first
         if frames > 1 and not holds:  # too little of the keyframe left: from the frame before, the new keyframe
-            measured = replace(self.matches(previous, current, seconds), from_previous=True)
+            measured = replace(self.matches(previous, current, measured.seconds), from_previous=True)
         if holds and policy.keeps(kept, first, frames):
             self._frames, self._first_kept = frames, first
         else:
@@ -614,7 +615,7 @@ def _timed(seconds: dict, stage: str, function, *arguments):
     """``function(*arguments)``, its wall time added to ``seconds[stage]``."""
     started = time.perf_counter()
     result = function(*arguments)
-    seconds[stage] = time.perf_counter() - started
+    seconds[stage] = seconds.get(stage, 0.0) + time.perf_counter() - started
     return result
 
 
