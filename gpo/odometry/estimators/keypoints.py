@@ -98,8 +98,8 @@ class RigidKeypoints(FloorEstimator):
             tolerance = parameters.refit_px * self.geometry.pixel_m
             start, end, kept = start[on_floor], end[on_floor], kept[on_floor]
             turned = turn_about_kept(start, end, kept, TURN_LEVER_PX * self.geometry.pixel_m)
+            firsts = [increment] if turned is None else [increment, turned]
             agree = agreeing(start[kept], end[kept], tolerance)
-            firsts = [increment] + [turned] * (turned is not None)
             if agree is not None and agree.sum() >= parameters.min_matches:
                 firsts.append(increment_from_point_pairs(start[kept][agree], end[kept][agree]))
             first = max(firsts, key=lambda candidate: explained(start, end, candidate, tolerance).sum())
