@@ -63,6 +63,8 @@ STATISTICS_STEP = 2  # image statistics are taken over every second row and colu
 
 
 OVERVIEW_GRID = 4  # the whole-view check's measurement: this many by this many points over the image's middle half
+WARY_FLOOR = 1 / 3  # a wary check's tolerance never below this share of overview_tolerance_px: on the population's
+# matte floors the whole view's shift scatters about the tracks' median by 0.2-0.27 px (median), 0.4-0.8 px (p90)
 
 
 class FlowError(ValueError):
@@ -94,6 +96,12 @@ class KLTParameters:
     median within this of the overview's shift's line and short of it along the line by more (floor-image pixels), or
     further than this from it and further from the predicted motion, is replaced by it
     (``gpo.motion.overview.replaces_median``), when the overview's correlation peak reaches ``overview_min_peak``.
+    ``overview_wary_share``: once the tracks and the whole view have disagreed, the next frame's tracks must come
+    within this share of the overview's shift (never nearer than ``WARY_FLOOR`` of ``overview_tolerance_px``, the
+    whole view's own scatter) to count as agreeing, until a frame's do (0: the tolerance stays fixed). On a glossy
+    screed the corners detected afresh after the overview took over are mostly the reflections' edges, and the first
+    frame measured from them read the floor's motion 30-40 % short while lying within ``overview_tolerance_px`` of the
+    overview's shift (population draw 8: 4-5 pixels a frame); see ``FloorFlow.track``.
     """
 
     max_corners: int = 150
@@ -116,6 +124,7 @@ class KLTParameters:
     overview_scale: float = 2.0
     overview_tolerance_px: float = 1.5
     overview_min_peak: float = 0.3  # pairs of independent noise images peak at up to 0.11, floors at 0.6-0.9
+    overview_wary_share: float = 0.15
 
     def __post_init__(self):
         check_rules(self._ranges(), self)
@@ -145,6 +154,7 @@ class KLTParameters:
             "overview_scale": (self.overview_scale == 0 or overview_ok, "0 (no check) or a number from 1.5 to 8"),
             "overview_tolerance_px": in_range(self.overview_tolerance_px, 0, 100, " px", low_open=True),
             "overview_min_peak": in_range(self.overview_min_peak, 0, 1, ", a share of the correlation"),
+            "overview_wary_share": in_range(self.overview_wary_share, 0, 1, ", a share of the overview's shift"),
         }
 
     @property
@@ -265,11 +275,12 @@ class FloorFlow:
     _valid: np.ndarray | None = field(default=None, init=False, repr=False)
     _size: tuple[int, int] | None = field(default=None, init=False, repr=False)
     _overview: Overview | None = field(default=None, init=False, repr=False)
+    _wary: bool = field(default=False, init=False, repr=False)  # the last frame's tracks and whole view disagreed
 
     def restart(self) -> None:
         """Forget the previous frame: the next ``track`` call starts afresh."""
         self._image, self._points, self._last, self._frames = None, None, None, 0
-        self._overview = None
+        self._overview, self._wary = None, False
         self._velocity, self._predicted = np.zeros(2, np.float32), False
 
     @property
@@ -292,6 +303,11 @@ class FloorFlow:
 
         ``time_s``: the frame's time in seconds, so that the predicted motion scales with the time since the
         previous frame (a dropped frame doubles it); None counts frames instead.
+
+        After a frame whose tracks and whole view disagreed the check is wary (``KLTParameters.overview_wary_share``):
+        the whole view's shift replaces the tracks' median, or the frame is in doubt, on a smaller disagreement, until
+        the tracks agree with it again. A pull along the shift's line still counts only within
+        ``overview_tolerance_px`` of that line (``gpo.motion.overview.pulled_short``).
         """
         if isinstance(image, FlowFrame):
             self._check(image.image)  # it may come from another tracker's ``prepare``
@@ -317,7 +333,8 @@ class FloorFlow:
         prediction = (self._velocity * elapsed).astype(np.float32)
         measurement, kept, frame_median = self._measure(reference, image, points, last, prediction)
         if found is not None:
-            measurement = self._checked(measurement, found, frame_median, prediction)
+            measurement = self._checked(measurement, found, frame_median, prediction, self._tolerance(found))
+            self._wary = measurement.quality.disagreed
         if measurement.quality.overview:  # a translation from the previous frame: the next start from this one
             self._velocity, self._predicted = (measurement.median / elapsed).astype(np.float32), True
             self._new_keyframe(image, texture, self._detect(image), detected=True)
@@ -409,16 +426,28 @@ class FloorFlow:
             self._overview = Overview(self.parameters.overview_scale, view.shape[::-1])
         return self._overview.observe(view)
 
+    def _tolerance(self, found: OverviewShift) -> float:
+        """How far (floor-image pixels) the tracks' median may lie from the overview's shift ``found`` and still agree
+        with it: ``overview_tolerance_px``, or after a frame in doubt ``overview_wary_share`` of the shift's length,
+        within ``WARY_FLOOR`` of that tolerance and the tolerance itself (``KLTParameters``)."""
+        p = self.parameters
+        if not (self._wary and p.overview_wary_share):
+            return p.overview_tolerance_px
+        wary = p.overview_wary_share * float(np.hypot(*found.shift_px))
+        return min(p.overview_tolerance_px, max(WARY_FLOOR * p.overview_tolerance_px, wary))
+
     def _checked(
-        self, measurement: FlowMeasurement, found: OverviewShift, moved: np.ndarray, predicted: np.ndarray
+        self, measurement: FlowMeasurement, found: OverviewShift, moved: np.ndarray, predicted: np.ndarray,
+        tolerance: float,
     ) -> FlowMeasurement:
         """``measurement``, or where the whole-view check's shift replaces the tracks' median motion since the previous
         frame (``moved``; ``predicted``: the motion predicted from the frame before; ``gpo.motion.overview``), that
         shift measured at the floor image's middle from the previous frame: a ``OVERVIEW_GRID`` square grid of
-        points."""
+        points. ``tolerance``: how far apart (pixels) the two still agree (``_tolerance``)."""
         p = self.parameters
-        if not replaces_median(moved, measurement.flag, found, predicted, p.overview_tolerance_px, p.overview_min_peak):
-            if measurement.flag is None and disagrees(moved, found, p.overview_tolerance_px, p.overview_min_peak):
+        if not replaces_median(moved, measurement.flag, found, predicted, tolerance, p.overview_min_peak,
+                               p.overview_tolerance_px):
+            if measurement.flag is None and disagrees(moved, found, tolerance, p.overview_min_peak):
                 return replace(measurement, quality=replace(measurement.quality, disagreed=True))
             return measurement
         width, height = self._size

@@ -62,16 +62,16 @@ class Overview:
         return OverviewShift(self.scale * np.array([du, dv]), float(peak))
 
 
-def pulled_short(median: np.ndarray, shift_px: np.ndarray, tolerance_px: float) -> bool:
+def pulled_short(median: np.ndarray, shift_px: np.ndarray, tolerance_px: float, line_px: float | None = None) -> bool:
     """Whether the flow's ``median`` (floor-image pixels) shows a slower layer's pull on it: within ``tolerance_px``
-    of the overview's ``shift_px`` line, more than ``tolerance_px`` short of the shift along it, the shift at least
-    ``2 * tolerance_px`` long (a shorter one cannot tell the pull from a crawl)."""
+    of the overview's ``shift_px`` line (within ``line_px`` when given), more than ``tolerance_px`` short of the shift
+    along it, the shift at least ``2 * tolerance_px`` long (a shorter one cannot tell the pull from a crawl)."""
     length = float(np.hypot(*shift_px))
     if length < 2.0 * tolerance_px:
         return False
     along = shift_px / length
     beside = abs(float(median[0] * along[1] - median[1] * along[0]))
-    return float(median @ along) < length - tolerance_px and beside <= tolerance_px
+    return float(median @ along) < length - tolerance_px and beside <= (tolerance_px if line_px is None else line_px)
 
 
 def disagrees(median: np.ndarray, overview: OverviewShift, tolerance_px: float, min_peak: float) -> bool:
@@ -88,11 +88,13 @@ def replaces_median(
     predicted: np.ndarray,
     tolerance_px: float,
     min_peak: float,
+    line_px: float | None = None,
 ) -> bool:
     """Whether the overview's shift should replace the flow's ``median`` (floor-image pixels; ``flag`` when the flow
     was flagged): the overview's peak reaches ``min_peak``, and the flow was flagged, or the two lie more than
     ``tolerance_px`` apart and the median was ``pulled_short`` or the shift lies nearer the motion ``predicted`` from
-    the previous frame (pixels) than the median does."""
+    the previous frame (pixels) than the median does; ``line_px``: how far from the shift's line a pulled median may
+    lie, when not ``tolerance_px``."""
     if overview.peak < min_peak:
         return False
     if flag is not None:
@@ -101,4 +103,4 @@ def replaces_median(
         return False
     shift = overview.shift_px
     nearer = float(np.hypot(*(shift - predicted))) < float(np.hypot(*(median - predicted)))
-    return pulled_short(median, shift, tolerance_px) or nearer
+    return pulled_short(median, shift, tolerance_px, line_px) or nearer
