@@ -305,9 +305,9 @@ class FloorFlow:
         previous frame (a dropped frame doubles it); None counts frames instead.
 
         After a frame whose tracks and whole view disagreed the check is wary (``KLTParameters.overview_wary_share``):
-        the whole view's shift replaces the tracks' median, or the frame is in doubt, on a smaller disagreement, until
-        the tracks agree with it again. A pull along the shift's line still counts only within
-        ``overview_tolerance_px`` of that line (``gpo.motion.overview.pulled_short``).
+        a smaller disagreement puts the frame in doubt, and the whole view's shift replaces the tracks' median when it
+        lies nearer the predicted motion, until the tracks agree with it again
+        (``gpo.motion.overview.replaces_median``).
         """
         if isinstance(image, FlowFrame):
             self._check(image.image)  # it may come from another tracker's ``prepare``
@@ -333,7 +333,7 @@ class FloorFlow:
         prediction = (self._velocity * elapsed).astype(np.float32)
         measurement, kept, frame_median = self._measure(reference, image, points, last, prediction)
         if found is not None:
-            measurement = self._checked(measurement, found, frame_median, prediction, self._tolerance(found))
+            measurement = self._checked(measurement, found, frame_median, prediction, self._wary_tolerance(found))
             self._wary = measurement.quality.disagreed
         if measurement.quality.overview:  # a translation from the previous frame: the next start from this one
             self._velocity, self._predicted = (measurement.median / elapsed).astype(np.float32), True
@@ -426,28 +426,28 @@ class FloorFlow:
             self._overview = Overview(self.parameters.overview_scale, view.shape[::-1])
         return self._overview.observe(view)
 
-    def _tolerance(self, found: OverviewShift) -> float:
-        """How far (floor-image pixels) the tracks' median may lie from the overview's shift ``found`` and still agree
-        with it: ``overview_tolerance_px``, or after a frame in doubt ``overview_wary_share`` of the shift's length,
-        within ``WARY_FLOOR`` of that tolerance and the tolerance itself (``KLTParameters``)."""
+    def _wary_tolerance(self, found: OverviewShift) -> float | None:
+        """After a frame in doubt, how far (floor-image pixels) the tracks' median may lie from the overview's shift
+        ``found`` and still agree with it: ``overview_wary_share`` of the shift's length, within ``WARY_FLOOR`` of
+        ``overview_tolerance_px`` and that tolerance itself (``KLTParameters``); None when the check is not wary."""
         p = self.parameters
         if not (self._wary and p.overview_wary_share):
-            return p.overview_tolerance_px
+            return None
         wary = p.overview_wary_share * float(np.hypot(*found.shift_px))
         return min(p.overview_tolerance_px, max(WARY_FLOOR * p.overview_tolerance_px, wary))
 
     def _checked(
         self, measurement: FlowMeasurement, found: OverviewShift, moved: np.ndarray, predicted: np.ndarray,
-        tolerance: float,
+        wary_px: float | None,
     ) -> FlowMeasurement:
         """``measurement``, or where the whole-view check's shift replaces the tracks' median motion since the previous
         frame (``moved``; ``predicted``: the motion predicted from the frame before; ``gpo.motion.overview``), that
         shift measured at the floor image's middle from the previous frame: a ``OVERVIEW_GRID`` square grid of
-        points. ``tolerance``: how far apart (pixels) the two still agree (``_tolerance``)."""
+        points. ``wary_px``: after a frame in doubt, how far apart (pixels) they still agree (``_wary_tolerance``)."""
         p = self.parameters
-        if not replaces_median(moved, measurement.flag, found, predicted, tolerance, p.overview_min_peak,
-                               p.overview_tolerance_px):
-            if measurement.flag is None and disagrees(moved, found, tolerance, p.overview_min_peak):
+        tolerance = p.overview_tolerance_px
+        if not replaces_median(moved, measurement.flag, found, predicted, tolerance, p.overview_min_peak, wary_px):
+            if measurement.flag is None and disagrees(moved, found, wary_px or tolerance, p.overview_min_peak):
                 return replace(measurement, quality=replace(measurement.quality, disagreed=True))
             return measurement
         width, height = self._size

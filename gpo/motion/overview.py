@@ -62,16 +62,16 @@ class Overview:
         return OverviewShift(self.scale * np.array([du, dv]), float(peak))
 
 
-def pulled_short(median: np.ndarray, shift_px: np.ndarray, tolerance_px: float, line_px: float | None = None) -> bool:
+def pulled_short(median: np.ndarray, shift_px: np.ndarray, tolerance_px: float) -> bool:
     """Whether the flow's ``median`` (floor-image pixels) shows a slower layer's pull on it: within ``tolerance_px``
-    of the overview's ``shift_px`` line (within ``line_px`` when given), more than ``tolerance_px`` short of the shift
-    along it, the shift at least ``2 * tolerance_px`` long (a shorter one cannot tell the pull from a crawl)."""
+    of the overview's ``shift_px`` line, more than ``tolerance_px`` short of the shift along it, the shift at least
+    ``2 * tolerance_px`` long (a shorter one cannot tell the pull from a crawl)."""
     length = float(np.hypot(*shift_px))
     if length < 2.0 * tolerance_px:
         return False
     along = shift_px / length
     beside = abs(float(median[0] * along[1] - median[1] * along[0]))
-    return float(median @ along) < length - tolerance_px and beside <= (tolerance_px if line_px is None else line_px)
+    return float(median @ along) < length - tolerance_px and beside <= tolerance_px
 
 
 def disagrees(median: np.ndarray, overview: OverviewShift, tolerance_px: float, min_peak: float) -> bool:
@@ -88,19 +88,22 @@ def replaces_median(
     predicted: np.ndarray,
     tolerance_px: float,
     min_peak: float,
-    line_px: float | None = None,
+    wary_px: float | None = None,
 ) -> bool:
     """Whether the overview's shift should replace the flow's ``median`` (floor-image pixels; ``flag`` when the flow
     was flagged): the overview's peak reaches ``min_peak``, and the flow was flagged, or the two lie more than
     ``tolerance_px`` apart and the median was ``pulled_short`` or the shift lies nearer the motion ``predicted`` from
-    the previous frame (pixels) than the median does; ``line_px``: how far from the shift's line a pulled median may
-    lie, when not ``tolerance_px``."""
+    the previous frame (pixels) than the median does. ``wary_px`` (after a frame in doubt,
+    ``gpo.motion.klt.KLTParameters.overview_wary_share``): the two disagree beyond this instead of ``tolerance_px``;
+    the pull's own test keeps ``tolerance_px``, so that on a smaller disagreement the prediction decides, which tells
+    a whole view dragged along by something moving through it (away from the steady motion) from a median pulled
+    short by reflections."""
     if overview.peak < min_peak:
         return False
     if flag is not None:
         return True
-    if not disagrees(median, overview, tolerance_px, min_peak):
+    if not disagrees(median, overview, tolerance_px if wary_px is None else wary_px, min_peak):
         return False
     shift = overview.shift_px
     nearer = float(np.hypot(*(shift - predicted))) < float(np.hypot(*(median - predicted)))
-    return pulled_short(median, shift, tolerance_px, line_px) or nearer
+    return pulled_short(median, shift, tolerance_px) or nearer
