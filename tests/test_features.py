@@ -168,18 +168,49 @@ def test_two_gross_mismatches_among_the_kept_do_not_turn_the_fit():
         moved = (start - centre) @ rotation.T + centre
         end = moved + rng.normal(0.0, 0.7, start.shape)
         end[:2] += rng.uniform(80, 100, 2)[:, None] * [[np.cos(a), np.sin(a)] for a in rng.uniform(0, 2 * np.pi, 2)]
-        points = np.arange(47)
-        matches = FeatureMatches(
-            Keypoints(start, np.zeros((47, 128), np.float32), np.ones(47)),
-            Keypoints(end, np.zeros((47, 128), np.float32), np.ones(47)),
-            np.column_stack([points, points]), None, None, np.ones(47, bool), None, {},
-        )
-        increment, flag = estimator.increment(matches, 1 / 35)
+        increment, flag = estimator.increment(_frame_of(start, end), 1 / 35)
         truth = increment_from_point_pairs(geometry.metres(start), geometry.metres(moved))
         misread.append(np.degrees(abs(increment[2] - truth[2])))
         assert flag is None
     # measured: at most 0.17 degrees (SD 0.07 for keypoints 0.7 px off); the refit without that start, up to 2.1
     assert max(misread) < 0.25
+
+
+def _frame_of(start, end) -> FeatureMatches:
+    """A frame's matches: ``start`` (N, 2) matched pair by pair with ``end``, all kept by the filters."""
+    count, points = len(start), np.arange(len(start))
+    return FeatureMatches(
+        Keypoints(start, np.zeros((count, 128), np.float32), np.ones(count)),
+        Keypoints(end, np.zeros((count, 128), np.float32), np.ones(count)),
+        np.column_stack([points, points]), None, None, np.ones(count, bool), None, {},
+    )
+
+
+@pytest.mark.parametrize("wrong", [0, 1, 2])
+def test_a_frame_whose_few_kept_matches_do_not_agree_on_one_motion_is_flagged_not_measured(wrong):
+    """Population draw 45's frame 912, on a glossy floor of few keypoints: six matches kept by both filters, four
+    of them moving the floor 24 px along the image and two 34 and 136 px off that, matched to other keypoints. The
+    fit on the six turned the robot 14.6 degrees in one frame, and the robot coasted on that turn for two more
+    frames, 44 degrees in all. Too few of the kept matches agree on one motion for any fit to be believed: the frame
+    is flagged and the robot coasts across it. With one wrong match among six, five still agree: one short of the
+    six a fit needs. Six that agree are measured, and read the floor's motion."""
+    floor = FloorImage.top_view((-0.16, 0.16), (-0.24, 0.24), 1e-3)
+    rig = downward_rig()
+    geometry = FloorGeometry(floor, rig.camera, rig.mount)
+    estimator = RigidKeypoints(SimpleNamespace(features=FeatureParameters(detector="sift")), geometry)
+    start = np.array([[134.0, 156.0], [271.0, 288.0], [142.0, 180.0], [240.0, 98.0], [402.0, 144.0], [449.0, 200.0]])
+    floor_motion = np.array([-24.0, -2.0])  # pixels
+    end = start + floor_motion + np.random.default_rng(45).normal(0.0, 0.5, start.shape)
+    end[len(start) - wrong:] += np.array([[-1.6, -31.8], [-4.6, -133.8]])[:wrong]
+    increment, flag = estimator.increment(_frame_of(start, end), 1 / 35)
+    if wrong:
+        assert increment is None
+        assert flag == f"too few kept matches agree on one motion: {6 - wrong} of 6 (at least 6)"
+    else:
+        assert flag is None
+        truth = increment_from_point_pairs(geometry.metres(start), geometry.metres(start + floor_motion))
+        assert abs(np.degrees(increment[2] - truth[2])) < 0.5
+        assert np.hypot(*(increment[:2] - truth[:2])) < 1e-3  # metres: 1 px
 
 
 # ------------------------------------------------------------------------------------------ wrong matches

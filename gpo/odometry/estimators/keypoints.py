@@ -2,7 +2,10 @@
 metres as the robot's increment, fitted again on every match it explains (``refit``, the suite's addition), from
 the paper's fit, the turn the matches share about the kept matches' centre (``turn_about_kept``) or the fit on the
 kept matches that agree on one motion (``agreeing``: a few gross mismatches the filters let through turn a
-least-squares fit by degrees), whichever explains most of them."""
+least-squares fit by degrees), whichever explains most of them. A frame where fewer than ``min_matches`` of the kept
+matches agree on one motion is not measured but flagged, and the robot coasts across it: on a glossy floor of few
+keypoints, four matches that agree and two matched to other keypoints turned the robot 15 degrees in one frame
+(population draw 45)."""
 
 from __future__ import annotations
 
@@ -100,8 +103,11 @@ class RigidKeypoints(FloorEstimator):
             turned = turn_about_kept(start, end, kept, TURN_LEVER_PX * self.geometry.pixel_m)
             firsts = [increment] if turned is None else [increment, turned]
             agree = agreeing(start[kept], end[kept], tolerance)
-            if agree is not None and agree.sum() >= parameters.min_matches:
-                firsts.append(increment_from_point_pairs(start[kept][agree], end[kept][agree]))
+            agreed = 0 if agree is None else int(agree.sum())
+            if agreed < parameters.min_matches:
+                return None, (f"too few kept matches agree on one motion: {agreed} of {int(kept.sum())} "
+                              f"(at least {parameters.min_matches})")
+            firsts.append(increment_from_point_pairs(start[kept][agree], end[kept][agree]))
             first = max(firsts, key=lambda candidate: explained(start, end, candidate, tolerance).sum())
             increment = refit(start, end, first, tolerance, parameters.min_matches)
         return increment, None
