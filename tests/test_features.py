@@ -118,6 +118,15 @@ def test_orb_in_a_turn_needs_the_refit(angle_deg, shift):
         assert abs(_errors(*rigid_fit(matches.start, matches.end), matrix)[0]) > 0.2
 
 
+def _sift_estimator() -> tuple[FloorGeometry, RigidKeypoints]:
+    """The downward rig's floor geometry on a 1 mm floor image (480 x 320 px) and the ``features`` estimator with
+    SIFT's settings on it."""
+    floor = FloorImage.top_view((-0.16, 0.16), (-0.24, 0.24), 1e-3)
+    rig = downward_rig()
+    geometry = FloorGeometry(floor, rig.camera, rig.mount)
+    return geometry, RigidKeypoints(SimpleNamespace(features=FeatureParameters(detector="sift")), geometry)
+
+
 def test_a_turn_seen_far_from_its_centre_is_read_in_full():
     """A small turn (0.0106 rad, a spin at 0.37 rad/s at 35 frames a second) about a point 530 px from a 480 x 320
     image's centre, as a camera far from the robot's centre sees it, on a floor whose keypoints are found 0.7 px
@@ -125,11 +134,8 @@ def test_a_turn_seen_far_from_its_centre_is_read_in_full():
     turn about a third short; started there, the refit (1.5 px) settles short as well. The estimator starts it from
     the turn every pair makes about the kept pairs' centre when that explains more pairs. Matched by descriptors,
     filtered and fitted as the pipeline does, in metres of a 1 mm floor image."""
-    floor = FloorImage.top_view((-0.16, 0.16), (-0.24, 0.24), 1e-3)  # 480 x 320 px
-    rig = downward_rig()
-    geometry = FloorGeometry(floor, rig.camera, rig.mount)
-    parameters = FeatureParameters(detector="sift")
-    estimator = RigidKeypoints(SimpleNamespace(features=parameters), geometry)
+    geometry, estimator = _sift_estimator()
+    parameters = estimator.config.features
     rng = np.random.default_rng(0)
     turn, centre, errors = 0.0106, np.array([-60.0, 520.0]), []
     rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
@@ -155,10 +161,7 @@ def test_two_gross_mismatches_among_the_kept_do_not_turn_the_fit():
     there: the paper's fit on all 47 turned that frame 5.3 degrees the wrong way, and the refit, started there or
     from the turn about the kept matches' centre (which the two move), settled there. Started from the fit on the
     matches RANSAC finds agreeing, the refit reads the turn as well as 45 keypoints 0.7 px off allow."""
-    floor = FloorImage.top_view((-0.16, 0.16), (-0.24, 0.24), 1e-3)  # 480 x 320 px
-    rig = downward_rig()
-    geometry = FloorGeometry(floor, rig.camera, rig.mount)
-    estimator = RigidKeypoints(SimpleNamespace(features=FeatureParameters(detector="sift")), geometry)
+    geometry, estimator = _sift_estimator()
     rng = np.random.default_rng(29)
     turn, centre = np.radians(17.0), np.array([230.0, 420.0])
     rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
@@ -194,10 +197,7 @@ def test_a_frame_whose_few_kept_matches_do_not_agree_on_one_motion_is_flagged_no
     frames, 44 degrees in all. Too few of the kept matches agree on one motion for any fit to be believed: the frame
     is flagged and the robot coasts across it. With one wrong match among six, five still agree: one short of the
     six a fit needs. Six that agree are measured, and read the floor's motion."""
-    floor = FloorImage.top_view((-0.16, 0.16), (-0.24, 0.24), 1e-3)
-    rig = downward_rig()
-    geometry = FloorGeometry(floor, rig.camera, rig.mount)
-    estimator = RigidKeypoints(SimpleNamespace(features=FeatureParameters(detector="sift")), geometry)
+    geometry, estimator = _sift_estimator()
     start = np.array([[134.0, 156.0], [271.0, 288.0], [142.0, 180.0], [240.0, 98.0], [402.0, 144.0], [449.0, 200.0]])
     floor_motion = np.array([-24.0, -2.0])  # pixels
     end = start + floor_motion + np.random.default_rng(45).normal(0.0, 0.5, start.shape)

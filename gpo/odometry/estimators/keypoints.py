@@ -100,13 +100,13 @@ class RigidKeypoints(FloorEstimator):
         if parameters.refit_px > 0:
             tolerance = parameters.refit_px * self.geometry.pixel_m
             start, end, kept = start[on_floor], end[on_floor], kept[on_floor]
-            turned = turn_about_kept(start, end, kept, TURN_LEVER_PX * self.geometry.pixel_m)
-            firsts = [increment] if turned is None else [increment, turned]
             agree = agreeing(start[kept], end[kept], tolerance)
             agreed = 0 if agree is None else int(agree.sum())
             if agreed < parameters.min_matches:
                 return None, (f"too few kept matches agree on one motion: {agreed} of {int(kept.sum())} "
                               f"(at least {parameters.min_matches})")
+            turned = turn_about_kept(start, end, kept, TURN_LEVER_PX * self.geometry.pixel_m)
+            firsts = [increment] if turned is None else [increment, turned]  # in this order: the first best wins
             firsts.append(increment_from_point_pairs(start[kept][agree], end[kept][agree]))
             first = max(firsts, key=lambda candidate: explained(start, end, candidate, tolerance).sum())
             increment = refit(start, end, first, tolerance, parameters.min_matches)
