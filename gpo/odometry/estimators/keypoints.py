@@ -1,8 +1,9 @@
 """``features``: the second paper's rigid 2-D transform (theta, Tx, Ty, its eqs. 3-4) of the kept keypoint matches in
-metres as the robot's increment, fitted again on every match it explains (``refit``, the suite's addition), from
-the paper's fit, the turn the matches share about the kept matches' centre (``turn_about_kept``) or the fit on the
-kept matches that agree on one motion (``agreeing``: a few gross mismatches the filters let through turn a
-least-squares fit by degrees), whichever explains most of them. A frame where fewer than ``min_matches`` of the kept
+metres as the robot's increment, fitted again on every match it explains (``refit``, the suite's addition: to
+``refit_px``, or to three times the kept matches' scatter where that is wider), from the paper's fit, the turn the
+matches share about the kept matches' centre (``turn_about_kept``) or the fit on the kept matches that agree on one
+motion (``agreeing``: a few gross mismatches the filters let through turn a least-squares fit by degrees),
+whichever explains most of them. A frame where fewer than ``min_matches`` of the kept
 matches agree on one motion is not measured but flagged, and the robot coasts across it: on a glossy floor of few
 keypoints, four matches that agree and two matched to other keypoints turned the robot 15 degrees in one frame
 (population draw 45)."""
