@@ -106,9 +106,7 @@ class FeatureParameters:
     ``invariance_threshold`` (t), ``cardinality`` (C; None: ``choose_cardinality``) and ``rounds`` (random
     partitions of the matches into loops). ``min_matches``: fewer matches left after the filters flag the frame.
     ``refit_px``: for the caller (``refit``), the fit is repeated on every match the first fit moves to within this
-    many pixels of its partner, or within three times the kept matches' scatter about it where that is wider (a
-    smooth or glossy floor's keypoints, found a pixel off); 0: the paper's fit alone. ``seed``: the invariance
-    check's random generator.
+    many pixels of its partner (0: the paper's fit alone). ``seed``: the invariance check's random generator.
     The suite's rules beside the paper's (``histogram_filter``, ``invariance_check``; each off gives the paper's):
     ``circular_binning``, ``band_floor_px`` (0: plain mu +- sigma) and ``short_side_px`` (0: every side judged).
     ``keyframe``: how long the frames after a keyframe are matched with it instead of with the frame before them

@@ -1,9 +1,8 @@
 """``features``: the second paper's rigid 2-D transform (theta, Tx, Ty, its eqs. 3-4) of the kept keypoint matches in
-metres as the robot's increment, fitted again on every match it explains (``refit``, the suite's addition: to
-``refit_px``, or to three times the kept matches' scatter where that is wider), from the paper's fit, the turn the
-matches share about the kept matches' centre (``turn_about_kept``) or the fit on the kept matches that agree on one
-motion (``agreeing``: a few gross mismatches the filters let through turn a least-squares fit by degrees),
-whichever explains most of them. A frame where fewer than ``min_matches`` of the kept
+metres as the robot's increment, fitted again on every match it explains (``refit``, the suite's addition), from
+the paper's fit, the turn the matches share about the kept matches' centre (``turn_about_kept``) or the fit on the
+kept matches that agree on one motion (``agreeing``: a few gross mismatches the filters let through turn a
+least-squares fit by degrees), whichever explains most of them. A frame where fewer than ``min_matches`` of the kept
 matches agree on one motion is not measured but flagged, and the robot coasts across it: on a glossy floor of few
 keypoints, four matches that agree and two matched to other keypoints turned the robot 15 degrees in one frame
 (population draw 45)."""
@@ -17,7 +16,6 @@ from gpo.odometry.estimators.base import FloorEstimator, agreeing
 from gpo.odometry.kinematics import increment_from_floor_motion, increment_from_point_pairs, seen_after
 
 REFIT_ROUNDS = 5  # at most this many fits in ``refit``
-GATE_SCATTERS = 3.0  # the refit's gate is at least this many times the kept matches' scatter (``scatter``)
 
 
 TURN_LEVER_PX = 20.0  # ``turn_about_kept`` reads the turn of the pairs at least this far from the kept matches' centre
@@ -42,14 +40,6 @@ def explained(start, end, increment, tolerance: float) -> np.ndarray:
     return np.hypot(*(np.asarray(end, dtype=float) - seen_after(start, increment)).T) < tolerance
 
 
-def scatter(start, end, increment) -> float:
-    """How far ``end`` (N, 2) scatters about where ``increment`` (dx, dy, dtheta) moves ``start`` (N, 2): the
-    standard deviation of one coordinate (the points' unit), as 1.4826 times the median absolute residual coordinate,
-    which a minority of wrong pairs does not move."""
-    residuals = np.asarray(end, dtype=float) - seen_after(start, increment)
-    return 1.4826 * float(np.median(np.abs(residuals)))
-
-
 def refit(start, end, increment, tolerance: float, min_matches: int) -> np.ndarray:
     """The increment (dx, dy, dtheta) fitted again on every pair of ``start`` and ``end`` (N, 2) that ``increment``
     explains to within ``tolerance`` (the points' unit), kept by the filters or not, and again on the pairs the new
@@ -59,11 +49,7 @@ def refit(start, end, increment, tolerance: float, min_matches: int) -> np.ndarr
     Why: the histogram filter keeps the vectors near the histograms' means, which in a turn selects the matches
     whose localisation errors make the turn look smaller; the paper's fit on them reads a 3 degree turn of a
     320 x 240 image up to 0.6 degrees short with ORB, whose keypoints lie on the grid of their pyramid level.
-    Re-admitting every match the fit explains undoes that; a first fit that far off needs a second round. The
-    tolerance is a gate, and a gate near the keypoints' own scatter turns away the right matches the noise moved
-    furthest, which reads the turn noisier than a fit on them all: with keypoints 1 px off, a 1.5 px gate gives each
-    turn 2.6 times the variance of a least-squares fit on every right match, a 3 px gate 1.05 times. The estimator
-    so widens it to ``GATE_SCATTERS`` times the kept matches' ``scatter`` where that is wider."""
+    Re-admitting every match the fit explains undoes that; a first fit that far off needs a second round."""
     start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
     admitted = None
     for _ in range(REFIT_ROUNDS):
@@ -123,6 +109,5 @@ class RigidKeypoints(FloorEstimator):
             firsts = [increment] if turned is None else [increment, turned]  # in this order: the first best wins
             firsts.append(increment_from_point_pairs(start[kept][agree], end[kept][agree]))
             first = max(firsts, key=lambda candidate: explained(start, end, candidate, tolerance).sum())
-            gate = max(tolerance, GATE_SCATTERS * scatter(start[kept], end[kept], first))
-            increment = refit(start, end, first, gate, parameters.min_matches)
+            increment = refit(start, end, first, tolerance, parameters.min_matches)
         return increment, None
