@@ -26,7 +26,11 @@ paper's, has none), and every run over its method's target (for ``gpo``: over 1 
 draw and what the run's summary says of it: frames coasted, held and skipped, the flags by reason, and the measured
 frames whose flow held a slower layer of vectors (``gpo.motion.klt``: the reflections of a glossy floor, which pull the
 median short without failing any check); for ``gpo``, whether the path holds a leg the paper's bicycle reads wrong
-(reverse driving read as forward, a spin's sense flipping: ``gpo.odometry.kinematics``, chapter 06).
+(reverse driving read as forward, a spin's sense flipping: ``gpo.odometry.kinematics``, chapter 06); and, measured
+against the draw's true path (kept in the sweep folder's ``truth``), how the run's heading error grew metre by metre
+(``heading_steps``): a steady drift, such as turns read short every time, or a random walk of each step's own noise.
+With ``--fused``, the fused route beside its two sources on each draw, the floor odometry it fuses and the tracking
+camera's own odometry, and the draws where it ends further off than the better of them (``sources_report``).
 
 ``--matte`` runs the same draws with every floor matte (``gpo.sim.population.matte``: the same rigs, paths, drifts
 and textures, without the glossy screed's reflections of the ceiling lamps), so that what the reflections cost each
@@ -47,13 +51,17 @@ import pandas as pd
 import yaml
 
 from gpo.batch.cluster import add_cluster_arguments, cluster_client
-from gpo.batch.runs import FINISHED, Run, code_version, configured, recording_digest, run_key
+from gpo.batch.runs import FINISHED, TRUTH_TOPIC, Run, code_version, configured, recording_digest, run_key
 from gpo.batch.sweep import sweep
 from gpo.batch.table import read_table
 from gpo.cameras.files import camera_to_kalibr
 from gpo.io import cache
+from gpo.io.bag import Recording
 from gpo.io.outputs import write_text
+from gpo.io.trajectory import Trajectory
+from gpo.metrics import associate, final_error, heading_errors
 from gpo.pipeline.config import config_to_dict, load_config
+from gpo.pipeline.run import tracking_path
 from gpo.sim.floors import FLOOR_KINDS
 from gpo.sim.population import Draw, draw, matte, render_draws
 from gpo.sim.record import recording_path
@@ -64,6 +72,9 @@ METHODS = {"fisheye": ["gpo", "gpo-exact", "gpo-rigid"], "downward": ["features"
 TARGETS = {"gpo-exact": 0.3, "gpo-rigid": 0.5, "features": 0.3, "fused": 0.3}  # p90 of the final error, % of distance
 REPORTED_OVER = {"gpo": 1.0}  # the method without a target (the paper's): runs over this are listed, %
 MANIFEST = "draws.json"  # in the sweep folder: each draw's recording and its digest (see ``batches``)
+TRUTH = "truth"  # in the sweep folder: each draw's true path, ``<label>.tum``, for the measures against it
+HEADING_STEP_M = 1.0  # ``heading_steps``: the heading error's change over each metre the truth drives
+STEADY_T = 3.0  # ... a mean step this many standard errors from zero is a steady drift, not a random walk
 PAPER_MODEL_MISSES = ("reverse", "spin")  # legs the paper's bicycle (``gpo``) reads wrong: eqs. 25-26, chapter 06
 
 
@@ -101,6 +112,11 @@ def _whole_pixels(edges: list[float], step: float) -> list[float]:
     return [round(high - round((high - edges[0]) / step) * step, 9), high]
 
 
+def fused_run(chosen: Draw, bag: Path) -> Run:
+    """The fused route's run of ``chosen`` on ``bag``: its config names the tracking camera's topic and mount."""
+    return Run(str(bag), chosen.label, str(CONFIG[chosen.kind]), adapted(chosen) | {"odometry.method": "fused"})
+
+
 def runs_of(draws: list[Draw], bags: dict[str, Path], fused: bool) -> list[Run]:
     """Every method of each draw's kind, on its bag, with its adapted config."""
     runs = []
@@ -124,11 +140,58 @@ def distribution(errors: pd.Series) -> dict:
     }
 
 
+def truth_and_camera(bag: str, config) -> tuple[Trajectory, dict | None]:
+    """``bag``'s true path, and (for a rig with a tracking camera, ``config`` the fused run's) the camera's own
+    odometry's final error against it (``final_error_percent``, ``final_heading_deg``): the fused route's other
+    source beside the floor."""
+    with Recording(bag) as recording:
+        truth = recording.trajectory(TRUTH_TOPIC)
+        if config is None:
+            return truth, None
+        error = final_error(tracking_path(recording, config.fusion), truth)
+    return truth, {"final_error_percent": float(error.percent), "final_heading_deg": math.degrees(error.heading_rad)}
+
+
+def heading_steps(estimate: Trajectory, truth: Trajectory, step_m: float = HEADING_STEP_M) -> dict | None:
+    """How the heading error of ``estimate`` grew, against ``truth``: its change over each ``step_m`` the truth drives
+    (the last step shorter), their mean and standard deviation (degrees), and ``t``, the mean over its standard error
+    (the final heading error over what a random walk of such steps would reach, one standard deviation of it). A
+    ``t`` of ``STEADY_T`` or more is a ``steady`` drift (a turn read short every time, a bias), less a random walk
+    (each step's own noise). None for fewer than three steps."""
+    estimated, reference = associate(estimate, truth)
+    error = np.unwrap(heading_errors(estimated, reference))
+    driven = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(reference.positions_xyz[:, :2], axis=0), axis=1))]
+    marks = np.r_[np.searchsorted(driven, np.arange(0.0, driven[-1], step_m)), len(driven) - 1]
+    steps = np.degrees(np.diff(error[marks]))
+    if len(steps) < 3:
+        return None
+    sd = float(steps.std(ddof=1))
+    t = float(steps.mean() / sd * math.sqrt(len(steps))) if sd > 0 else math.inf
+    return {
+        "steps": len(steps),
+        "mean_deg": round(float(steps.mean()), 4),
+        "sd_deg": round(sd, 4),
+        "t": round(t, 2),
+        "steady": abs(t) >= STEADY_T,
+    }
+
+
+def run_heading_steps(row: pd.Series, out: Path) -> dict | None:
+    """``heading_steps`` of a run of the sweep folder ``out`` against its draw's true path; None where either file
+    is missing (a run that failed, a sweep made before the truth was kept)."""
+    path, truth = out / "runs" / row["key"] / "trajectory.tum", out / TRUTH / f"{row['recording']}.tum"
+    if not (path.is_file() and truth.is_file()):
+        return None
+    return heading_steps(Trajectory.read_tum(path), Trajectory.read_tum(truth))
+
+
 def explanation(row: pd.Series, out: Path) -> dict:
     """What a run's summary (in the sweep folder ``out``) says of it: its status, error, flags by reason, frames not
     measured, measured frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor), and
     the distance it measured over the distance driven; ``explained`` when a caution, a flag, a frame not measured or
-    a status other than ok names a cause (a slower layer alone does not: it is seen on runs that end right too)."""
+    a status other than ok names a cause (a slower layer alone does not: it is seen on runs that end right too); and
+    measured against the draw's true path, how its heading error grew (``heading_steps``: a steady drift or a random
+    walk), which the run itself cannot know."""
     flags = json.loads(row["flags"]) if isinstance(row.get("flags"), str) else {}
     frames = {
         name: int(row[f"frames_{name}"])
@@ -150,7 +213,16 @@ def explanation(row: pd.Series, out: Path) -> dict:
         "frames_slower_layer": slower,
         "cautions": cautions,
         "explained": bool(cautions or flags or frames or row["status"] != "ok"),
+        "heading_steps": run_heading_steps(row, out),
     }
+
+
+def steps_summary(steps: list[dict | None]) -> dict:
+    """Over a method's runs, how their heading errors grew (``heading_steps``): the runs measured, the median of
+    their steps' standard deviations (degrees a metre) and how many drifted steadily."""
+    measured = [s for s in steps if s is not None]
+    median = float(np.median([s["sd_deg"] for s in measured])) if measured else None
+    return {"runs": len(measured), "median_sd_deg": _rounded(median, 4), "steady": sum(s["steady"] for s in measured)}
 
 
 def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
@@ -174,6 +246,7 @@ def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
             "p90_target": TARGETS.get(method),
             "target_met": None if method not in TARGETS or stats["p90"] is None else stats["p90"] <= TARGETS[method],
             "median_heading_deg": round(float(finished["final_heading_deg"].abs().median()), 3),
+            "heading_steps": steps_summary([run_heading_steps(row, out) for _, row in finished.iterrows()]),
             "by_floor_kind": {
                 kind: {"draws": int(on.sum()), **distribution(rows.loc[on, "final_error_percent"])}
                 for kind in FLOOR_KINDS
@@ -229,6 +302,12 @@ def batches(client, draws: list[Draw], out: Path, args) -> float:
         for chosen, digest in zip(batch, digests, strict=True):
             manifest[chosen.label] = {"recording": str(bags[chosen.label]), "sha256": digest}
         sweep(runs_of(batch, bags, args.fused), out, client, progress=sys.stderr.isatty())
+        fused = [None if d.setup.drift is None else configured(fused_run(d, bags[d.label])) for d in batch]
+        futures = client.map(truth_and_camera, [str(bags[d.label]) for d in batch], fused, pure=False)
+        (out / TRUTH).mkdir(exist_ok=True)
+        for chosen, (truth, camera) in zip(batch, client.gather(futures), strict=True):
+            truth.write_tum(out / TRUTH / f"{chosen.label}.tum")
+            manifest[chosen.label] |= {"camera": camera} if camera is not None else {}
         if args.peer:
             for label, error in peer_errors(client, batch, bags).items():
                 manifest[label]["peer"] = error
@@ -259,6 +338,10 @@ def _finished(chosen: Draw, manifest: dict, out: Path, args) -> bool:
     if entry is None or entry["recording"] != str(recording_path(chosen.setup, label=chosen.label)):
         return False
     if args.peer and chosen.kind == "fisheye" and "peer" not in entry:
+        return False
+    if not (out / TRUTH / f"{chosen.label}.tum").is_file():
+        return False
+    if chosen.setup.drift is not None and "camera" not in entry:
         return False
     runs = runs_of([chosen], {chosen.label: entry["recording"]}, args.fused)
     rows = [out / "runs" / key / "row.json" for key in run_keys(runs, manifest)]
@@ -299,6 +382,36 @@ def peer_report(table: pd.DataFrame, draws: list[Draw], peer: dict[str, dict]) -
     return report_
 
 
+def sources_report(table: pd.DataFrame, draws: list[Draw], cameras: dict[str, dict]) -> dict:
+    """The fused route beside its two sources on each draw with a tracking camera: the floor odometry it fuses
+    (the config's ``fusion.floor_method``) and the camera's own odometry (``cameras``: by draw label, as
+    ``truth_and_camera`` gives it), final error %; the draws where the fused path ends further off than the better
+    source, and by how much; and the three final heading errors (degrees), with the source whose heading the fused
+    path's is nearer (``heading_nearer``): the one the filter followed in the turns."""
+    floor = load_config(CONFIG["fisheye"]).fusion.floor_method
+    errors, headings = (
+        table.pivot_table(index="recording", columns="method", values=column, aggfunc="first")
+        for column in ("final_error_percent", "final_heading_deg")
+    )
+    rows = {}
+    for d in draws:
+        if d.label in cameras and d.label in errors.index and "fused" in errors.columns:
+            fused, ground = errors.at[d.label, "fused"], errors.at[d.label, floor]
+            camera = cameras[d.label]["final_error_percent"]
+            better = min(ground, camera)
+            turned = {"fused": headings.at[d.label, "fused"], floor: headings.at[d.label, floor],
+                      "camera": cameras[d.label]["final_heading_deg"]}
+            nearer = min((floor, "camera"), key=lambda source: abs(turned["fused"] - turned[source]))
+            rows[d.label] = {"fused": _rounded(fused, 4), floor: _rounded(ground, 4), "camera": _rounded(camera, 4),
+                             "over_better": _rounded(fused - better, 4), "ratio": _rounded(fused / better, 2),
+                             "heading_deg": {k: _rounded(v, 3) for k, v in turned.items()},
+                             "heading_nearer": None if math.isnan(turned["fused"]) else nearer}
+    over = {label: math.inf if row["over_better"] is None else row["over_better"] for label, row in rows.items()}
+    worse = [label for label, points in over.items() if points > 0]
+    worst = max(worse, key=over.get, default=None)
+    return {"floor_method": floor, "draws": len(rows), "worse": len(worse), "worst_draw": worst, "runs": rows}
+
+
 def _rounded(value, digits):
     return None if value is None or not math.isfinite(value) else round(float(value), digits)
 
@@ -332,6 +445,12 @@ def print_report(result: dict) -> None:
             for finish, s in stats["by_finish"].items()
         ]
         print(f"{method:10s} " + "; ".join(cells))
+    print("\nthe heading error's growth against the truth, metre by metre (heading_steps): median standard deviation "
+          "of a metre's step, and the runs whose steps drift steadily (a bias) rather than walk")
+    for method, stats in result["methods"].items():
+        steps = stats["heading_steps"]
+        print(f"{method:10s} {_cell(steps['median_sd_deg']):>7s} deg a metre; {steps['steady']} of {steps['runs']} "
+              "runs steady")
     unexplained = sum(not f["explained"] for f in result["failing"])
     print(
         f"\n{len(result['failing'])} runs over their method's target (gpo: over 1 %) or not finished, "
@@ -350,6 +469,11 @@ def print_report(result: dict) -> None:
         slower = run_["frames_slower_layer"]
         why += f"; a slower layer in {slower} frames" if slower else ""
         why += "; reverse or spin: the paper's model reads them wrong" if run_["outside_paper_model"] else ""
+        steps = run_["heading_steps"]
+        if steps is not None:
+            kind = "a steady drift" if steps["steady"] else "a random walk"
+            why += (f"; against the truth the heading's error grew {steps['mean_deg']:+.3f} +- {steps['sd_deg']:.3f} "
+                    f"deg a metre over {steps['steps']} steps: {kind} (t {steps['t']:+.1f})")
         print(
             f"  {run_['draw']} {run_['method']:9s} {_cell(run_['final_error_percent']):>7s} % "
             f"distance x{_cell(run_['distance_ratio'])} heading {_cell(run_['final_heading_deg'])} deg | {rig}, "
@@ -367,6 +491,19 @@ def print_peer(peer: dict) -> None:
         cells = " ".join(f"{_cell(row[m]):>9s}" for m in methods)
         print(f"{group:22s} {row['draws']:5d} {_cell(row['peer']):>7s} {cells}")
     print("ahead of the peer on every group: " + ", ".join(f"{m} {v}" for m, v in peer["ahead_everywhere"].items()))
+
+
+def print_sources(sources: dict) -> None:
+    floor = sources["floor_method"]
+    print(f"\nthe fused route beside its sources ({floor} and the tracking camera alone), final error %: worse than "
+          f"the better source on {sources['worse']} of {sources['draws']} draws")
+    for label, row in sorted(sources["runs"].items(), key=lambda item: -(item[1]["over_better"] or 0)):
+        if row["over_better"] is not None and row["over_better"] > 0:
+            turned = row["heading_deg"]
+            print(f"  {label} fused {_cell(row['fused']):>6s} {floor} {_cell(row[floor]):>7s} camera "
+                  f"{_cell(row['camera']):>6s}: {row['over_better']:+.3f} points, x{row['ratio']:.2f} the better; "
+                  f"heading {turned['fused']:+.2f} / {turned[floor]:+.2f} / {turned['camera']:+.2f} deg, nearer the "
+                  f"{row['heading_nearer']}'s")
 
 
 def _cell(value) -> str:
@@ -409,9 +546,14 @@ def main() -> int:
     if args.peer:
         peer = {d.label: manifest[d.label]["peer"] for d in draws if d.kind == "fisheye"}
         result["peer"] = peer_report(table, draws, peer)
+    if args.fused:
+        cameras = {d.label: manifest[d.label]["camera"] for d in draws if "camera" in manifest[d.label]}
+        result["sources"] = sources_report(table, draws, cameras)
     print_report(result)
     if args.peer:
         print_peer(result["peer"])
+    if args.fused:
+        print_sources(result["sources"])
     print(
         f"\n{len(draws)} draws, {len(runs)} runs in {finished - started:.0f} s on {workers} workers (rendering "
         f"{rendered_s:.0f} s of it); sweep folder {out}"

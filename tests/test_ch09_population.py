@@ -13,6 +13,7 @@ from gpo.book.ch09_population import (
     population_groups,
     population_text,
     run_errors,
+    sources_text,
 )
 
 
@@ -108,3 +109,26 @@ def test_the_failing_runs_are_counted_with_those_no_cause_names():
                                 "1", "of", "them", "without", "a", "named", "cause"]
     assert lines[1].split()[:8] == ["fused", "1", "of", "4", "runs", "over", "0.3", "%"]
     assert lines[2].split()[:8] == ["gpo-rigid", "0", "of", "4", "runs", "over", "0.5", "%"]
+
+
+def test_a_run_no_cause_names_says_how_its_heading_error_grew_against_the_truth():
+    walk = {"steps": 14, "mean_deg": 0.199, "sd_deg": 0.478, "t": 1.56, "steady": False}
+    result = {"methods": {"features": {"runs": 30, "p90_target": 0.3}},
+              "failing": [{"method": "features", "over": 0.3, "explained": False, "draw": "draw029-downward",
+                           "final_error_percent": 0.4034, "heading_steps": walk},
+                          {"method": "features", "over": 0.3, "explained": True, "draw": "draw045-downward",
+                           "final_error_percent": 3.149, "heading_steps": dict(walk, steady=True)}]}
+    lines = failing_text(result).splitlines()
+    assert len(lines) == 2 and "1 of them without a named cause" in lines[0]
+    assert lines[1].split()[:3] == ["draw029-downward", "0.403", "%,"] and "a random walk" in lines[1]
+    assert "+0.199 +- 0.478 deg a metre over 14 metres (t +1.6)" in lines[1]
+
+
+def test_the_fused_route_is_listed_where_it_ends_further_off_than_its_better_source():
+    runs = {"draw000-fisheye": {"fused": 0.011, "gpo-exact": 0.007, "camera": 0.2, "over_better": 0.004, "ratio": 1.57},
+            "draw048-fisheye": {"fused": 1.19, "gpo-exact": 10.18, "camera": 0.166, "over_better": 1.024,
+                                "ratio": 7.17},
+            "draw020-fisheye": {"fused": 0.006, "gpo-exact": 0.93, "camera": 0.3, "over_better": -0.924, "ratio": 0.01}}
+    lines = sources_text({"sources": {"floor_method": "gpo-exact", "draws": 3, "worse": 2, "runs": runs}}).splitlines()
+    assert lines[0] == "fused worse than the better of gpo-exact and the camera alone on 2 of 3 draws"
+    assert lines[1:] == ["  draw048-fisheye: fused 1.190 %, gpo-exact 10.180 %, camera 0.166 % (x7.17 the better)"]

@@ -98,7 +98,8 @@ def run_errors(result: dict) -> list[tuple[str, tuple[str, ...], str, float]]:
 def failing_text(result: dict) -> str:
     """Per method, how many runs of a ``benchmarks/population.py`` result ended over the error it lists them from
     (the method's p90 target; ``gpo`` 1 %, ``fused`` 0.3 %) or did not finish, and how many of those carry no caution,
-    flag or error that names a cause."""
+    flag or error that names a cause; of each of those, how its heading error grew against the truth (the report's
+    ``heading_steps``: a steady drift or a random walk), where the report measured it."""
     lines = []
     for method, stats in result["methods"].items():
         failing = [run for run in result["failing"] if run["method"] == method]
@@ -106,6 +107,33 @@ def failing_text(result: dict) -> str:
         limit = "/".join(f"{value} %" for value in sorted(over) if value is not None) or "its limit"
         lines.append(f"{method:10s} {len(failing):3d} of {stats['runs']} runs over {limit} or not finished, "
                      f"{sum(not run['explained'] for run in failing)} of them without a named cause")
+        for run in failing:
+            steps = run.get("heading_steps")
+            if not run["explained"] and steps is not None:
+                kind = "a steady drift" if steps["steady"] else "a random walk"
+                lines.append(f"{'':10s} {run['draw']} {run['final_error_percent']:.3f} %, against the truth: its "
+                             f"heading's error {kind}, {steps['mean_deg']:+.3f} +- {steps['sd_deg']:.3f} deg a metre "
+                             f"over {steps['steps']} metres (t {steps['t']:+.1f})")
+    return "\n".join(lines)
+
+
+def sources_text(result: dict) -> str:
+    """The fused route beside its two sources, the floor odometry it fuses and the tracking camera alone, over a
+    ``benchmarks/population.py --fused`` result: on how many draws it ends further off than the better of them, and
+    the draws where it does by more than a hundredth of a per cent."""
+    sources = result["sources"]
+    floor = sources["floor_method"]
+    runs = sources["runs"]
+    lines = [f"fused worse than the better of {floor} and the camera alone on {sources['worse']} of "
+             f"{sources['draws']} draws"]
+    over = {label: np.inf if row["over_better"] is None else row["over_better"] for label, row in runs.items()}
+    for label in sorted(over, key=lambda label: -over[label]):
+        row = runs[label]
+        if row["fused"] is None:
+            lines.append(f"  {label}: fused did not finish")
+        elif over[label] > 0.01:
+            lines.append(f"  {label}: fused {row['fused']:.3f} %, {floor} {row[floor]:.3f} %, camera "
+                         f"{row['camera']:.3f} % (x{row['ratio']:.2f} the better)")
     return "\n".join(lines)
 
 
