@@ -112,9 +112,10 @@ def _whole_pixels(edges: list[float], step: float) -> list[float]:
     return [round(high - round((high - edges[0]) / step) * step, 9), high]
 
 
-def fused_run(chosen: Draw, bag: Path) -> Run:
-    """The fused route's run of ``chosen`` on ``bag``: its config names the tracking camera's topic and mount."""
-    return Run(str(bag), chosen.label, str(CONFIG[chosen.kind]), adapted(chosen) | {"odometry.method": "fused"})
+def run_of(chosen: Draw, bag: Path, method: str) -> Run:
+    """``method``'s run of ``chosen`` on ``bag``, with its adapted config (the fused route's names the tracking
+    camera's topic and mount)."""
+    return Run(str(bag), chosen.label, str(CONFIG[chosen.kind]), adapted(chosen) | {"odometry.method": method})
 
 
 def runs_of(draws: list[Draw], bags: dict[str, Path], fused: bool) -> list[Run]:
@@ -122,9 +123,7 @@ def runs_of(draws: list[Draw], bags: dict[str, Path], fused: bool) -> list[Run]:
     runs = []
     for chosen in draws:
         methods = METHODS[chosen.kind] + (["fused"] if fused and chosen.setup.drift is not None else [])
-        for method in methods:
-            overrides = adapted(chosen) | {"odometry.method": method}
-            runs.append(Run(str(bags[chosen.label]), chosen.label, str(CONFIG[chosen.kind]), overrides))
+        runs += [run_of(chosen, bags[chosen.label], method) for method in methods]
     return runs
 
 
@@ -176,22 +175,27 @@ def heading_steps(estimate: Trajectory, truth: Trajectory, step_m: float = HEADI
     }
 
 
-def run_heading_steps(row: pd.Series, out: Path) -> dict | None:
-    """``heading_steps`` of a run of the sweep folder ``out`` against its draw's true path; None where either file
-    is missing (a run that failed, a sweep made before the truth was kept)."""
-    path, truth = out / "runs" / row["key"] / "trajectory.tum", out / TRUTH / f"{row['recording']}.tum"
-    if not (path.is_file() and truth.is_file()):
-        return None
-    return heading_steps(Trajectory.read_tum(path), Trajectory.read_tum(truth))
+def runs_heading_steps(table: pd.DataFrame, out: Path) -> dict[str, dict | None]:
+    """``heading_steps`` of each run of the sweep folder ``out`` (by its key) against its draw's true path, each
+    draw's truth read once; None where either file is missing (a run that failed, a sweep made before the truth was
+    kept)."""
+    truths, steps = {}, {}
+    for _, row in table.iterrows():
+        path, truth = out / "runs" / row["key"] / "trajectory.tum", out / TRUTH / f"{row['recording']}.tum"
+        if not (path.is_file() and truth.is_file()):
+            steps[row["key"]] = None
+            continue
+        if row["recording"] not in truths:
+            truths[row["recording"]] = Trajectory.read_tum(truth)
+        steps[row["key"]] = heading_steps(Trajectory.read_tum(path), truths[row["recording"]])
+    return steps
 
 
 def explanation(row: pd.Series, out: Path) -> dict:
     """What a run's summary (in the sweep folder ``out``) says of it: its status, error, flags by reason, frames not
     measured, measured frames whose flow held a slower layer (``gpo.motion.klt``: reflections on a glossy floor), and
     the distance it measured over the distance driven; ``explained`` when a caution, a flag, a frame not measured or
-    a status other than ok names a cause (a slower layer alone does not: it is seen on runs that end right too); and
-    measured against the draw's true path, how its heading error grew (``heading_steps``: a steady drift or a random
-    walk), which the run itself cannot know."""
+    a status other than ok names a cause (a slower layer alone does not: it is seen on runs that end right too)."""
     flags = json.loads(row["flags"]) if isinstance(row.get("flags"), str) else {}
     frames = {
         name: int(row[f"frames_{name}"])
@@ -213,7 +217,6 @@ def explanation(row: pd.Series, out: Path) -> dict:
         "frames_slower_layer": slower,
         "cautions": cautions,
         "explained": bool(cautions or flags or frames or row["status"] != "ok"),
-        "heading_steps": run_heading_steps(row, out),
     }
 
 
@@ -227,7 +230,10 @@ def steps_summary(steps: list[dict | None]) -> dict:
 
 def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
     """The methods' distributions against their targets (over all draws and over the draws whose floor holds each
-    kind), and the runs over them with their explanations (``out``: the sweep's folder)."""
+    kind), and the runs over them with their explanations and, measured against the draw's true path, how their
+    heading errors grew (``heading_steps``: a steady drift or a random walk, which a run itself cannot know; ``out``:
+    the sweep's folder)."""
+    steps = runs_heading_steps(table, out)
     parameters = {d.label: d.parameters for d in draws}
     kinds = {d.label: d.setup.floor.kinds for d in draws}
     glossy = {d.label: d.parameters["sheen"] == "on" for d in draws}
@@ -246,7 +252,7 @@ def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
             "p90_target": TARGETS.get(method),
             "target_met": None if method not in TARGETS or stats["p90"] is None else stats["p90"] <= TARGETS[method],
             "median_heading_deg": round(float(finished["final_heading_deg"].abs().median()), 3),
-            "heading_steps": steps_summary([run_heading_steps(row, out) for _, row in finished.iterrows()]),
+            "heading_steps": steps_summary([steps[key] for key in finished["key"]]),
             "by_floor_kind": {
                 kind: {"draws": int(on.sum()), **distribution(rows.loc[on, "final_error_percent"])}
                 for kind in FLOOR_KINDS
@@ -270,6 +276,7 @@ def report(table: pd.DataFrame, draws: list[Draw], out: Path) -> dict:
                     "final_heading_deg": _rounded(row["final_heading_deg"], 3),
                     "over": limit,
                     **explanation(row, out),
+                    "heading_steps": steps[row["key"]],
                     "outside_paper_model": method == "gpo" and any(leg in drawn["path"] for leg in PAPER_MODEL_MISSES),
                     "parameters": drawn,
                 }
@@ -302,7 +309,7 @@ def batches(client, draws: list[Draw], out: Path, args) -> float:
         for chosen, digest in zip(batch, digests, strict=True):
             manifest[chosen.label] = {"recording": str(bags[chosen.label]), "sha256": digest}
         sweep(runs_of(batch, bags, args.fused), out, client, progress=sys.stderr.isatty())
-        fused = [None if d.setup.drift is None else configured(fused_run(d, bags[d.label])) for d in batch]
+        fused = [None if d.setup.drift is None else configured(run_of(d, bags[d.label], "fused")) for d in batch]
         futures = client.map(truth_and_camera, [str(bags[d.label]) for d in batch], fused, pure=False)
         (out / TRUTH).mkdir(exist_ok=True)
         for chosen, (truth, camera) in zip(batch, client.gather(futures), strict=True):

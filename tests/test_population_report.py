@@ -76,15 +76,16 @@ def test_heading_steps_tell_a_steady_drift_from_a_random_walk(population):
     assert population.heading_steps(*straight([0.1, 0.1])) is None  # too few steps to say
 
 
-def test_a_listed_run_says_how_its_heading_error_grew(population, tmp_path):
+def test_each_runs_heading_steps_read_its_path_and_its_draws_truth(population, tmp_path):
     estimate, truth = straight([0.1 + 0.03 * (-1) ** k for k in range(11)])
     (tmp_path / "runs" / "k").mkdir(parents=True)
     (tmp_path / "truth").mkdir()
     estimate.write_tum(tmp_path / "runs" / "k" / "trajectory.tum")
     truth.write_tum(tmp_path / "truth" / "draw000-fisheye.tum")
-    steps = population.explanation(row(), tmp_path)["heading_steps"]
-    assert steps["steady"] and steps["steps"] == 11
-    assert population.explanation(row(recording="draw001-downward"), tmp_path)["heading_steps"] is None  # no truth
+    table = pd.DataFrame([row(), row(key="j", recording="draw001-downward")])
+    steps = population.runs_heading_steps(table, tmp_path)
+    assert steps["k"]["steady"] and steps["k"]["steps"] == 11
+    assert steps["j"] is None  # neither its path nor its draw's truth
 
 
 def test_the_fused_route_is_compared_with_the_better_of_its_sources(population):
