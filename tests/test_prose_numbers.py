@@ -1,11 +1,15 @@
-"""The words follow the results: every number a chapter's prose states is backed.
+"""The words follow the results: every number a chapter's prose states is backed by the cells beside it.
 
-A number in a markdown cell (one with a decimal point, or a whole number followed by a unit: 7°, 12 %, 93 mm, 848 px,
-3x) must be one of:
+A chapter is read in sections: a section runs from a heading (of any level) to the next one. A number in a markdown
+cell (one with a decimal point, or a whole number followed by a unit: 7°, 12 %, 93 mm, 848 px, 3x) must be one of:
 
-- **printed** by an output of its chapter (the same digits; a sign or thousands separator aside), or written in one of
-  its code cells, where the reader sees it set;
+- **printed** by an output of a code cell of its own section (the same digits; a sign or thousands separator aside),
+  or written in one of those code cells, where the reader sees it set. Digits printed in another section do not count:
+  a sentence is checked against the output it describes, not against any output of the chapter;
 - **marked** by the span around it, whose title says where it comes from:
+  - ``<span title="printed in: Lucas-Kanade">0.072 px</span>``: a number printed in another section of the chapter,
+    named by its heading's text (a "Paper and suite" box looking back, an exercise's answer); the number must be
+    printed there;
   - ``<span title="the first paper, Table 4">0.058 m</span>`` (or "the second paper, ..."): a paper's figure, which
     must occur in that paper's text where the papers are at hand (``GPO_PAPERS_DIR``, else ``../shared/papers``);
   - ``<span title="= 752 / 600 * 0.25">0.31 m</span>``: a worked figure, the expression after "=" evaluated and
@@ -44,6 +48,8 @@ NOT_PROSE = re.compile(
     re.S,
 )
 SPAN = re.compile(r'<span title="([^"]*)">(.*?)</span>', re.S)
+HEADING = re.compile(r"^#{1,6} +(.+)$", re.M)
+PRINTED_IN = "printed in: "
 PRINTED_NUMBER = re.compile(r"\d+(?:\.\d+)?")
 
 OPERATORS = {
@@ -105,6 +111,33 @@ def printed_numbers(notebook: dict) -> set[str]:
     return {canonical(number) for number in PRINTED_NUMBER.findall(canonical("\n".join(texts)))}
 
 
+def sections(notebook: dict) -> list[tuple[str, list[int]]]:
+    """The chapter's sections in order: each heading's text and the indices of its cells, up to the next heading.
+    Cells before the first heading form a section of their own, named ""."""
+    found: list[tuple[str, list[int]]] = [("", [])]
+    for index, cell in enumerate(notebook["cells"]):
+        heading = HEADING.search("".join(cell["source"])) if cell["cell_type"] == "markdown" else None
+        if heading:
+            found.append((heading_text(heading.group(1)), []))
+        found[-1][1].append(index)
+    return [(name, cells) for name, cells in found if cells]
+
+
+def heading_text(line: str) -> str:
+    """A heading as a reader names it: without its marks, emphasis or formulas' dollars."""
+    return " ".join(re.sub(r"[*_`$]", "", line).split())
+
+
+def printed_by_section(notebook: dict) -> tuple[dict[int, set[str]], dict[str, set[str]]]:
+    """The numbers printed in each cell's own section (by cell index), and in each section (by its heading)."""
+    by_cell, by_heading = {}, {}
+    for name, indices in sections(notebook):
+        numbers = printed_numbers({"cells": [notebook["cells"][index] for index in indices]})
+        by_heading.setdefault(name, set()).update(numbers)
+        by_cell.update(dict.fromkeys(indices, numbers))
+    return by_cell, by_heading
+
+
 def markdown_cells(notebook: dict) -> list[tuple[int, str]]:
     return [
         (index, "".join(cell["source"]))
@@ -128,17 +161,35 @@ def load(path: Path) -> dict:
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda path: path.stem)
-def test_every_number_in_the_prose_is_printed_or_marked(path):
+def test_every_number_in_the_prose_is_printed_in_its_section_or_marked(path):
     notebook = load(path)
-    printed = printed_numbers(notebook)
+    printed, _ = printed_by_section(notebook)
     unbacked = []
     for index, source in markdown_cells(notebook):
         for number, context in prose_numbers(SPAN.sub(" ", source)):
-            if number not in printed:
+            if number not in printed[index]:
                 unbacked.append(f"cell {index}: {number}  | ...{' '.join(context.split())}...")
-    assert not unbacked, f"{len(unbacked)} numbers in the prose are printed by no output of the chapter:\n" + "\n".join(
-        unbacked
-    )
+    assert not unbacked, f"{len(unbacked)} numbers printed by no output of their section:\n" + "\n".join(unbacked)
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda path: path.stem)
+def test_numbers_printed_in_another_section_are_printed_there(path):
+    notebook = load(path)
+    _, printed = printed_by_section(notebook)
+    wrong = []
+    for index, title, text in spans(notebook):
+        if not title.startswith(PRINTED_IN):
+            continue
+        heading = heading_text(title[len(PRINTED_IN) :])
+        if heading not in printed:
+            wrong.append(f"cell {index}: no section is headed {heading!r}")
+            continue
+        wrong += [
+            f"cell {index}: {n} is not printed in {heading!r}"
+            for n in PRINTED_NUMBER.findall(canonical(text))
+            if n not in printed[heading]
+        ]
+    assert not wrong, "\n".join(wrong)
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda path: path.stem)
@@ -166,9 +217,11 @@ def test_constants_occur_in_the_code(path):
     code = {canonical(number) for number in PRINTED_NUMBER.findall(sources)} | printed_numbers(load(path))
     missing = []
     for index, title, text in spans(load(path)):
-        if title.startswith(("=", *PAPERS)):
+        if title.startswith(("=", PRINTED_IN, *PAPERS)):
             continue
-        assert title.startswith("constant: "), f"cell {index}: a span's title names a paper, '= ...' or 'constant: '"
+        assert title.startswith("constant: "), (
+            f"cell {index}: a span's title names a paper, '= ...', '{PRINTED_IN}...' or 'constant: '"
+        )
         missing += [f"cell {index}: {n} ({title})" for n in PRINTED_NUMBER.findall(canonical(text)) if n not in code]
     assert not missing, "constants that occur nowhere in gpo's code or configs:\n" + "\n".join(missing)
 
@@ -202,6 +255,29 @@ def test_the_papers_figures_occur_in_the_papers(path):
 )
 def test_prose_numbers_reads_what_a_reader_reads(text, numbers):
     assert [number for number, _ in prose_numbers(text)] == numbers
+
+
+def test_a_number_is_checked_against_its_own_section_only():
+    def markdown(text):
+        return {"cell_type": "markdown", "source": text}
+
+    def code(printed):
+        return {"cell_type": "code", "source": "", "outputs": [{"output_type": "stream", "text": printed}]}
+
+    notebook = {
+        "cells": [
+            markdown("## Lucas-Kanade"),
+            code("converged to 0.072 px"),
+            markdown("It settles to 0.072 px."),
+            markdown("## The *median*"),
+            code("median 1.711 px"),
+            markdown("The median ends 0.072 px off, 1.711 px at worst."),
+        ]
+    }
+    by_cell, by_heading = printed_by_section(notebook)
+    assert [name for name, _ in sections(notebook)] == ["Lucas-Kanade", "The median"]
+    assert "0.072" in by_cell[2] and "0.072" not in by_cell[5] and "1.711" in by_cell[5]
+    assert by_heading["Lucas-Kanade"] == {"0.072"}
 
 
 def test_a_worked_expression_is_evaluated():
