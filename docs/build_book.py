@@ -39,8 +39,10 @@ JUPYTER_BOOK = Path(sys.executable).with_name("jupyter-book")
 
 
 def toc_chapters(toc: Path = BOOK / "_toc.yml") -> list[str]:
-    """The file names (without suffix) of the table of contents' chapters, in reading order."""
-    return [entry["file"] for entry in yaml.safe_load(toc.read_text(encoding="utf-8"))["chapters"]]
+    """The file names (without suffix) of the table of contents' chapters, part after part, in reading order."""
+    return [
+        entry["file"] for part in yaml.safe_load(toc.read_text(encoding="utf-8"))["parts"] for entry in part["chapters"]
+    ]
 
 
 def panel_models(state: dict, model_id: str) -> list[dict]:
@@ -117,7 +119,9 @@ def lay_out_sources(notebooks: Path, source: Path) -> list[str]:
             nb = without_widgets(nbformat.read(found[name], as_version=4))
             nbformat.write(nb, source / f"{name}.ipynb")
     toc = yaml.safe_load((BOOK / "_toc.yml").read_text(encoding="utf-8"))
-    toc["chapters"] = [entry for entry in toc["chapters"] if entry["file"] in present]
+    for part in toc["parts"]:
+        part["chapters"] = [entry for entry in part["chapters"] if entry["file"] in present]
+    toc["parts"] = [part for part in toc["parts"] if part["chapters"]]
     (source / "_toc.yml").write_text(yaml.safe_dump(toc, sort_keys=False), encoding="utf-8")
     return [name for name in present if name in found]
 

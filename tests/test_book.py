@@ -65,15 +65,29 @@ def _plain(text: str) -> str:
     return re.sub(r"[`*]", "", text.lstrip("#")).replace("'", "\u2019").strip()
 
 
-def _readme_chapters() -> list[str]:
-    """The notebooks named by README.md's chapter table, in its order."""
+def _readme_parts() -> dict[str, list[str]]:
+    """The notebooks named by README.md's chapter tables, in its order, by the heading of the part above each table."""
     text = (ROOT / "README.md").read_text(encoding="utf-8").split("\n## Chapters\n", 1)[1].split("\n## ", 1)[0]
-    return re.findall(r"^\| \[`([^`]+)`\]\(notebooks/\1\.ipynb\)", text, flags=re.MULTILINE)
+    return {
+        heading: re.findall(r"^\| \[`([^`]+)`\]\(notebooks/\1\.ipynb\)", table, flags=re.MULTILINE)
+        for heading, table in re.findall(r"^### (.+?)\n(.*?)(?=^### |\Z)", text, flags=re.MULTILINE | re.DOTALL)
+    }
+
+
+def _readme_chapters() -> list[str]:
+    """The notebooks named by README.md's chapter tables, in its order."""
+    return [name for names in _readme_parts().values() for name in names]
+
+
+def _toc_parts() -> dict[str, list[str]]:
+    """docs/book/_toc.yml's parts: each caption and its pages, in order."""
+    parts = yaml.safe_load((BOOK_SOURCE / "_toc.yml").read_text())["parts"]
+    return {part["caption"]: [entry["file"] for entry in part["chapters"]] for part in parts}
 
 
 def _toc() -> list[str]:
     """docs/book/_toc.yml's pages after the front page, in order."""
-    return [entry["file"] for entry in yaml.safe_load((BOOK_SOURCE / "_toc.yml").read_text())["chapters"]]
+    return [page for pages in _toc_parts().values() for page in pages]
 
 
 def _state(nb: dict) -> dict:
@@ -120,10 +134,19 @@ def test_the_table_of_contents_follows_the_readme_and_holds_every_notebook():
     assert _toc() == [*chapters, "references"]
 
 
+def test_the_book_has_two_parts_the_method_then_the_lab():
+    parts = _toc_parts()
+    assert list(parts) == ["The method", "The lab", "References"]
+    assert _readme_parts() == {"The method": parts["The method"], "The lab": parts["The lab"]}
+    assert all(name[:2].isdigit() for name in parts["The method"])
+    assert parts["The lab"] and not any(name[:2].isdigit() for name in parts["The lab"])
+
+
 def test_the_sidebar_lists_the_pages_in_reading_order(book):
     order = ["index", *_toc()]
     for name in order:
         nav = _soup(book / f"{name}.html").select_one("nav.bd-docs-nav")
+        assert [caption.get_text(strip=True) for caption in nav.select("p.caption")] == list(_toc_parts()), name
         links = [a["href"].removesuffix(".html") for a in nav.select("a.reference.internal")]
         assert [link if link != "#" else name for link in links] == order, name
 
