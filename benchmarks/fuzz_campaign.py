@@ -1,15 +1,17 @@
 """A long fuzzing campaign over gpo's readers: many mutated bags, configs, calibrations, sweep specs and TUM files.
 
-    python benchmarks/fuzz_campaign.py [--examples N] [--seed S] [--target NAME ...] [--out DIR]
+    python benchmarks/fuzz_campaign.py [--examples N] [--seed S [S ...]] [--target NAME ...] [--out DIR]
     python benchmarks/fuzz_campaign.py --replay DIR/TARGET/NUMBER
 
 Runs the strategies of tests/fuzzing (the ones tests/test_fuzz.py draws a few of in CI) with ``N`` inputs per reader
-and command (default 800, over 10 000 in all), hypothesis seeded by ``S``, and every input through
-``fuzzing.examine``. Prints, per reader, the inputs tried, how many were read whole and how many refused (in part),
-the slowest read, and every finding (a traceback, a hang over ``HANG_S`` s, a changed input, a wrong result, an error
-that names no file) once per kind and place; then the totals. Each finding's input is written to
-``DIR/TARGET/NUMBER`` with what was done to its seed (``how.txt``), and ``--replay`` reads it again and prints what
-happens. Exits 1 when a traceback, hang, changed input or wrong result was found.
+and command and per seed (default 800, over 10 000 in all), hypothesis seeded by each ``S`` in turn, and every input
+through ``fuzzing.examine``. Prints, per reader, the inputs tried over every seed, how many were read whole and how
+many refused (in part), its findings by kind, the slowest read, and every finding (a traceback, a hang over
+``HANG_S`` s, a changed input, a wrong result, an error that names no file) once per kind and place; then the
+totals. What goes wrong in the harness itself on an input is a finding too (a traceback), never the campaign's end.
+Each finding's input is written to ``DIR/TARGET/NUMBER`` with what was done to its seed (``how.txt``), and
+``--replay`` reads it again and prints what happens. Exits 1 when a traceback, hang, changed input or wrong result
+was found.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from hypothesis import HealthCheck, Phase, given, seed, settings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from fuzzing import HANG_S, TARGETS, Finding, Mutant, Target, examine
+from fuzzing import HANG_S, KINDS, TARGETS, Finding, Mutant, Target, examine
 from fuzzing.harness import refusals
 
 FAILING = ("traceback", "hang", "changed input", "wrong result")
@@ -44,7 +46,11 @@ def campaign(target: Target, examples: int, chosen_seed: int) -> tuple[Counter, 
     @given(target.mutants)
     def run(mutant: Mutant) -> None:
         started = time.perf_counter()
-        result, finding = examine(target, mutant, unclear=True)
+        try:
+            result, finding = examine(target, mutant, unclear=True)
+        except Exception as error:  # the harness itself failed on this input: a finding, and the campaign goes on
+            detail = "in the harness: " + "".join(traceback.format_exception(error))
+            result, finding = error, Finding(target.name, "traceback", detail, mutant)
         slowest[0] = max(slowest[0], time.perf_counter() - started)
         counts["tried"] += 1
         counts["refused" if refusals(result) else "read"] += 1
@@ -93,8 +99,9 @@ def replay(folder: Path) -> int:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--examples", type=int, default=800, help="inputs per reader (default 800)")
-    parser.add_argument("--seed", type=int, default=0, help="hypothesis's seed (default 0)")
+    parser.add_argument("--examples", type=int, default=800, help="inputs per reader and seed (default 800)")
+    parser.add_argument("--seed", type=int, nargs="+", default=[0], help="hypothesis's seeds, one after another "
+                        "(default 0)")
     parser.add_argument("--target", action="append", choices=list(TARGETS), help="a reader (default: all)")
     parser.add_argument("--out", type=Path, help="where findings' inputs go (default: a new temporary folder)")
     parser.add_argument("--replay", type=Path, help="a kept input's folder: read it again")
@@ -102,14 +109,21 @@ def main() -> int:
     if args.replay:
         return replay(args.replay)
     out = args.out or Path(tempfile.mkdtemp(prefix="gpo-fuzz-campaign-"))
+    seeds = ", ".join(map(str, args.seed))
     totals, started, failing = Counter(), time.perf_counter(), 0
-    print(f"{args.examples} inputs per reader, seed {args.seed}; findings' inputs in {out}")
+    print(f"{args.examples} inputs per target and seed, seeds {seeds}; findings' inputs in {out}")
     for name in args.target or TARGETS:
-        begun = time.perf_counter()
-        counts, findings, slowest = campaign(TARGETS[name], args.examples, args.seed)
+        begun, counts, findings, slowest = time.perf_counter(), Counter(), [], 0.0
+        for chosen_seed in args.seed:
+            seed_counts, seed_findings, seed_slowest = campaign(TARGETS[name], args.examples, chosen_seed)
+            counts.update(seed_counts)
+            findings += seed_findings
+            slowest = max(slowest, seed_slowest)
         totals.update(counts)
-        print(f"\n{name}: {counts['tried']} tried, {counts['read']} read whole, {counts['refused']} refused (in part "
-              f"or whole), slowest {slowest:.2f} s, {time.perf_counter() - begun:.0f} s in all")
+        kinds = ", ".join(f"{kind} {counts[kind]}" for kind in KINDS)
+        print(f"\n{name}: {counts['tried']} inputs (seeds {seeds}), {counts['read']} read whole, {counts['refused']} "
+              f"refused (in part or whole); findings {len(findings)}: {kinds}; slowest {slowest:.2f} s, "
+              f"{time.perf_counter() - begun:.0f} s in all")
         seen = {}
         for finding in findings:
             seen.setdefault(signature(finding), []).append(finding)

@@ -7,6 +7,11 @@ A bounded number of inputs per reader, drawn by hypothesis with the suite's dera
 the same inputs on every run. benchmarks/fuzz_campaign.py draws many more.
 """
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
 from fuzzing import TARGETS, Finding, examine
 from fuzzing.bags import bag_mutants
@@ -14,6 +19,7 @@ from fuzzing.commands import run_process
 from fuzzing.harness import Mutant, Target
 from fuzzing.tum import tum_mutants
 from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 EXAMPLES = {
     "ros1": 30, "ros2-sqlite3": 30, "ros2-mcap": 30, "config": 60, "kalibr": 60, "basalt": 60, "boofcv": 60,
@@ -62,3 +68,40 @@ def test_a_command_as_a_process_exits_cleanly(command, mutants):
         assert finding is None, shown(finding)
 
     run()
+
+
+def _raising_check(error: Exception):
+    def check(result, mutant):
+        raise error
+
+    return check
+
+
+@pytest.mark.parametrize(
+    ("error", "kind"), [(ValueError("the saved config does not load again"), "wrong result"),
+                        (KeyError("no such part"), "traceback")]
+)
+def test_a_check_that_fails_otherwise_than_by_assertion_is_a_finding(error, kind):
+    """What goes wrong inside the harness (the config target's round trip raising ValueError) is reported as a
+    finding of its kind, with the check named, never raised into the campaign."""
+    target = Target("one file", st.nothing(), lambda path: path.read_text(), _raising_check(error))
+    result, finding = examine(target, Mutant("seed", (("file.txt", b"text"),), "file.txt"))
+    assert result == "text"
+    assert finding is not None and finding.kind == kind
+    assert "checking the result" in finding.detail and str(error.args[0]) in finding.detail
+
+
+def test_the_campaign_takes_several_seeds_and_prints_each_targets_inputs_and_findings(tmp_path):
+    campaign = Path(__file__).parents[1] / "benchmarks" / "fuzz_campaign.py"
+    done = subprocess.run(
+        [sys.executable, str(campaign), "--examples", "4", "--seed", "7", "8", "--target", "tum", "--target",
+         "camera_info", "--out", str(tmp_path)],
+        capture_output=True, text=True, timeout=300, env={**os.environ, "PYTHONPATH": str(campaign.parents[1])},
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = done.stdout.splitlines()
+    assert "4 inputs per target and seed, seeds 7, 8" in lines[0]
+    for name in ("tum", "camera_info"):
+        closing = next(line for line in lines if line.startswith(f"{name}: "))
+        assert "8 inputs (seeds 7, 8)" in closing and "findings 0" in closing, closing
+    assert lines[-1].startswith("16 inputs in ") and "traceback 0, hang 0, changed input 0, wrong result 0" in lines[-1]

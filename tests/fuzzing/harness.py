@@ -5,10 +5,11 @@ A ``Target`` is a reader with what it reads from (a strategy of ``Mutant``s) and
 property fails:
 
 - ``traceback``: an exception other than ``DOCUMENTED_ERRORS`` left the reader (a MemoryError too: the reader runs
-  with ``MEMORY_BYTES`` to spare);
+  with ``MEMORY_BYTES`` to spare), or the check of its result;
 - ``hang``: the reader took more than ``HANG_S`` seconds;
 - ``changed input``: a file of the input was changed, added or removed by reading it;
-- ``wrong result``: the reader returned what ``check`` finds wrong;
+- ``wrong result``: the reader returned what ``check`` finds wrong (an AssertionError, or a documented error of what
+  the check does with the result: a config saved and refused when read again);
 - ``unclear error``: a refusal that does not name the input's file (checked for the targets that promise it,
   ``Target.names_file``; counted for every target by the campaign).
 """
@@ -198,6 +199,12 @@ def _read(target: Target, mutant: Mutant, entry: Path) -> tuple[object, Finding 
                 target.check(result, mutant)
         except AssertionError as wrong:
             return result, Finding(target.name, "wrong result", str(wrong), mutant)
+        except DOCUMENTED_ERRORS as wrong:  # e.g. a config read, saved and refused when read again
+            detail = f"checking the result: {type(wrong).__name__}: {wrong}"
+            return result, Finding(target.name, "wrong result", detail, mutant)
+        except Exception as error:
+            detail = "checking the result: " + "".join(traceback.format_exception(error))
+            return result, Finding(target.name, "traceback", detail, mutant)
     return result, None
 
 
