@@ -1,6 +1,7 @@
 """Rig configs: a rig written and read back is the same rig; a camchain file can stand in for the camera; every number
 held to the range a real rig can have, which admits what the presets and chapters use."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -140,7 +141,7 @@ def test_the_ranges_admit_what_the_presets_and_chapters_use():
         ("mount", {"position_m": [-50.5, 0.0, 0.1], "rpy_deg": [0, 6, 0]}, r"mount\.position_m\.0 must be a number "
                                                                            r"from -50 to 50 m, got -50\.5"),
         ("mount", {"position_m": [0.6, 0.0, 0.1], "rpy_deg": [0, 361, 0]}, r"mount\.rpy_deg\.1 must be a number from "
-                                                                           r"-360 to 360 deg, got 361\.0"),
+                                                                           r"-360 to 360 deg, got 361"),
     ],
 )
 def test_a_value_just_beyond_its_range_is_refused_with_key_value_range_and_unit(tmp_path, key, value, message):
@@ -149,3 +150,81 @@ def test_a_value_just_beyond_its_range_is_refused_with_key_value_range_and_unit(
     with pytest.raises(ValueError, match=rf"rig\.yaml: {message}$"):
         load_rig(tmp_path / "rig.yaml")
     load_rig(save_rig(tmp_path / "again.yaml", t265_rig()))  # and the rig itself, in range, is read
+
+
+def _document(tmp_path, edit) -> Path:
+    """The shipped T265 config with ``edit(document)`` applied, written to ``tmp_path / rig.yaml``."""
+    document = yaml.safe_load((Path(gpo.__file__).parent / "configs" / "sim_t265.yaml").read_text())
+    edit(document)
+    path = tmp_path / "rig.yaml"
+    path.write_text(yaml.safe_dump(document, sort_keys=False))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("section", "key", "value"),
+    [
+        ("klt", "overview_scale", False),  # read as 0, it turned the whole-view check off
+        ("keyframe", "min_overlap", True),  # read as 1.0
+        ("features", "contrast_threshold", True),
+        ("klt", "max_corners", True),
+        ("fusion", "tracking_max_gap_s", False),
+        (None, "rate_hz", True),
+    ],
+)
+def test_a_flag_is_not_a_number(tmp_path, section, key, value):
+    path = _document(tmp_path, lambda document: (document[section] if section else document).update({key: value}))
+    name = re.escape(f"{section}.{key}" if section else key)
+    expected = rf"rig\.yaml: {name}(: expected a (whole )?number \(got {value}\)| must be a .*number .*, got {value})"
+    with pytest.raises(ValueError, match=expected):
+        load_config(path)
+
+
+@pytest.mark.parametrize(
+    ("where", "edit"),
+    [
+        ("mount.position_m.0", lambda document: document["mount"].update(position_m=[True, 0.0, 0.12])),
+        ("camera.resolution.0", lambda document: document["camera"].update(resolution=[True, 800])),
+        ("features.keyframe.min_overlap", lambda document: document["features"].update(keyframe={"min_overlap": True})),
+    ],
+)
+def test_a_flag_is_not_a_number_in_a_list_or_a_nested_section(tmp_path, where, edit):
+    refused = r"(: expected a (whole )?number \(got True\)| must be a .*number .*, got True)"
+    with pytest.raises(ValueError, match=rf"rig\.yaml: {re.escape(where)}{refused}"):
+        load_config(_document(tmp_path, edit))
+
+
+@pytest.mark.parametrize("value", [1, 0, "yes", "true", 1.0])
+@pytest.mark.parametrize(("section", "key"), [("klt", "normalise_brightness"), ("features", "cross_check")])
+def test_a_number_or_a_word_is_not_a_flag(tmp_path, section, key, value):
+    path = _document(tmp_path, lambda document: document[section].update({key: value}))
+    with pytest.raises(ValueError, match=rf"rig\.yaml: {section}\.{key}: expected true or false \(got {value!r}\)"):
+        load_config(path)
+
+
+def test_a_number_written_as_text_is_refused(tmp_path):
+    path = _document(tmp_path, lambda document: document["klt"].update(quality_level="0.01"))
+    with pytest.raises(ValueError, match=r"rig\.yaml: klt\.quality_level: expected a number \(got '0\.01'\)"):
+        load_config(path)
+
+
+@pytest.mark.parametrize(
+    ("resolution", "message"),
+    [([848, 8.0e32], r"resolution\.1 must be a whole number from 1 to 20000 px, got 8e\+32"),
+     ([True, 800], r"resolution\.0 must be a whole number from 1 to 20000 px, got True")],
+)
+def test_a_camchain_a_config_names_is_held_to_the_ranges_of_a_camera_written_inline(tmp_path, resolution, message):
+    rig = t265_rig()
+    camchain = yaml.safe_load(save_kalibr(tmp_path / "camchain.yaml", {"cam0": rig.camera}).read_text())
+    inline = _document(tmp_path, lambda document: document["camera"].update(resolution=resolution))
+    with pytest.raises(ValueError, match=rf"rig\.yaml: camera\.{message}"):
+        load_config(inline)
+    camchain["cam0"]["resolution"] = resolution
+    (tmp_path / "camchain.yaml").write_text(yaml.safe_dump(camchain))
+
+    def by_file(document):
+        del document["camera"]
+        document["camchain"] = "camchain.yaml"
+
+    with pytest.raises(ValueError, match=rf"rig\.yaml: camchain camchain\.yaml, cam0: {message}"):
+        load_config(_document(tmp_path, by_file))

@@ -37,7 +37,7 @@ laughs") before it is built.
 from __future__ import annotations
 
 import difflib
-import re
+import json
 import typing
 from dataclasses import fields, is_dataclass
 from pathlib import Path
@@ -59,10 +59,15 @@ from gpo.motion.ranges import MAX_IMAGE_PX, REACH_M, OutOfRange, check_value
 
 
 def ranged(low, high, unit: str = "", whole: bool = False, low_open: bool = False):
-    """A number of the file held to its range on a real rig, ``unit`` and all (``gpo.motion.ranges.check_value``)."""
-    return Annotated[
-        int if whole else float, AfterValidator(lambda value: check_value(value, low, high, unit, whole, low_open))
-    ]
+    """A number of the file held to its range on a real rig, ``unit`` and all (``gpo.motion.ranges.check_value``):
+    anything else (a flag, text, a number out of range, a fraction for a whole number) is refused with the range's
+    words; a number given is read as a float, or an int when ``whole``."""
+
+    def checked(value):
+        check_value(value, low, high, unit, whole, low_open)
+        return value if whole else float(value)
+
+    return Annotated[Any, AfterValidator(checked)]
 
 
 Name = Annotated[str, Field(min_length=1)]
@@ -204,35 +209,61 @@ def check_config(document, where: str) -> ConfigFile:
     if not isinstance(document, dict):
         keys = ", ".join(ConfigFile.model_fields)
         raise ValueError(f"{where}: a config is a YAML mapping of {keys}; got {type(document).__name__}")
+    return checked(ConfigFile, document, where)
+
+
+def checked(model: type[BaseModel], document, where: str, within: tuple = ()):
+    """``document`` checked by ``model`` (``ConfigFile`` or one of its sections; ``within``: its keys from the top of
+    a config file, or () for a document of its own) and built. Strictly, as YAML's scalars are typed: a flag is no
+    number, a number no flag, text no number (the document is read as the JSON it is, in pydantic's strict mode). A
+    ValueError names ``where`` it came from and lists every problem, each with its key."""
     try:
-        return ConfigFile.model_validate(document)
+        text = json.dumps(document, default=str)
+    except (TypeError, ValueError) as error:  # keys JSON cannot hold, a structure that holds itself
+        raise ValueError(f"{where}: not a document of keys and values: {error}") from None
+    try:
+        return model.model_validate_json(text, strict=True)
     except ValidationError as error:
-        raise ValueError(f"{where}: " + "\n  ".join(_problem(e) for e in error.errors()[:8])) from None
+        root = ConfigFile if within else model
+        problems = [_problem({**e, "loc": (*within, *e["loc"])}, root) for e in error.errors()[:8]]
+        raise ValueError(f"{where}: " + "\n  ".join(problems)) from None
 
 
-def _problem(error: dict) -> str:
-    """One schema error as people read it: the key's path, what is wrong, what is allowed."""
+EXPECTED = {
+    "float_type": "expected a number", "float_parsing": "expected a number", "int_type": "expected a whole number",
+    "int_parsing": "expected a whole number", "int_from_float": "expected a whole number",
+    "bool_type": "expected true or false", "bool_parsing": "expected true or false", "string_type": "expected text",
+    "model_type": "expected a mapping of its keys", "dataclass_type": "expected a mapping of its keys",
+    "dict_type": "expected a mapping of its keys", "tuple_type": "expected a list", "list_type": "expected a list",
+    "finite_number": "expected a finite number",
+}
+"""What a key of the wrong type expected, by pydantic's error type."""
+
+
+def _problem(error: dict, root: type) -> str:
+    """One schema error as people read it: the key's path (its keys from the top of ``root``), what is wrong,
+    what is allowed."""
     location = [part for part in error["loc"] if not isinstance(part, int)]
     where = ".".join(str(part) for part in error["loc"]) or "the file"
     cause = error.get("ctx", {}).get("error")
     if isinstance(cause, OutOfRange):  # a key of the file, or the keys of a section that checks its own
         return "\n  ".join(cause.lines(".".join(str(part) for part in error["loc"])))
     if error["type"] in ("extra_forbidden", "unexpected_keyword_argument"):
-        known = _keys(location[:-1])
+        known = _keys(location[:-1], root)
         close = difflib.get_close_matches(str(location[-1]), known, n=1)
         hint = f"did you mean {close[0]}? " if close else ""
         section = ".".join(map(str, location[:-1])) or "the file"
         return f"{where}: unknown key; {hint}the keys of {section} are {', '.join(known)}"
-    message = re.sub(r" or (an )?instance of \w+", "", error["msg"].removeprefix("Value error, "))
+    message = EXPECTED.get(error["type"]) or error["msg"].removeprefix("Value error, ")
     if error["type"] == "missing":
         return f"{where}: missing; it is required"
     shown = repr(error["input"])
     return f"{where}: {message} (got {shown if len(shown) < 60 else shown[:57] + '...'})"
 
 
-def _keys(location: list) -> list[str]:
-    """The keys allowed at ``location`` (a list of keys from the top of the file)."""
-    kind: Any = ConfigFile
+def _keys(location: list, root: type) -> list[str]:
+    """The keys allowed at ``location`` (a list of keys from the top of ``root``)."""
+    kind: Any = root
     for key in location:
         hints = typing.get_type_hints(kind)
         kind = next((a for a in (hints[key], *typing.get_args(hints[key])) if _has_keys(a)), None)
@@ -306,10 +337,16 @@ def _camera(config: ConfigFile, path: Path, where: str):
             "folder); expected a Kalibr camchain YAML file: give its path, or the camera inline as camera"
         )
     try:
+        document = read_yaml(camchain)
+        entries = document if isinstance(document, dict) else {}
+        name = config.camchain_camera or next(iter(entries), None)
+        if name in entries:  # held to the ranges of a camera written inline, then read as one
+            checked(CameraSection, entries[name], f"{where}: camchain {config.camchain}, {name}")
         cameras = load_kalibr(camchain)
     except (ValueError, OSError, yaml.YAMLError) as error:
+        if where in str(error):
+            raise
         raise ValueError(f"{where}: camchain {config.camchain}: {error}") from None
-    name = config.camchain_camera or next(iter(cameras))
     if name not in cameras:
         raise ValueError(f"{where}: camchain_camera {name!r} is not in {config.camchain} ({', '.join(cameras)})")
     return cameras[name]
@@ -321,12 +358,7 @@ def load_mount(path) -> CameraMount:
     document = read_yaml(path)
     if not isinstance(document, dict) or "mount" not in document:
         raise ValueError(f"{path}: expected a YAML mapping with a mount section, as gpo mount writes it")
-    try:
-        section = MountSection.model_validate(document["mount"])
-    except ValidationError as error:
-        problems = [_problem({**e, "loc": ("mount", *e["loc"])}) for e in error.errors()[:8]]
-        raise ValueError(f"{path}: " + "\n  ".join(problems)) from None
-    return _mount(section, path)
+    return _mount(checked(MountSection, document["mount"], str(path), ("mount",)), path)
 
 
 def _mount(section: MountSection, where) -> CameraMount:
