@@ -788,6 +788,7 @@ def test_a_config_that_is_no_file(world, tmp_path, capsys, kind):
         ([f"{100 + i} {i} 0 0 0 0 0 1" for i in range(20)], ["do not overlap"]),
         (["1.0 0 0 0 0 0 0 1", "what is this", "1.2 0 0 0 0 0 0 1"], [":2: a TUM line has 8 numbers"]),
         (["1.0 0 0 0 0 0 0 1", "1.1 zero 0 0 0 0 0 1"], [":2: not a number"]),
+        (["1.0 0 0 0 0 0 0 1", "1.1000000000.99 0 0 0 0 0 0 1"], [":2: the stamp '1.1000000000.99' is not a time"]),
         ([f"{1 + 0.1 * i:.1f} nan 0 0 0 0 0 1" for i in range(5)], ["must be finite numbers"]),
         ([], ["holds no poses"]),
         (["1.0 0 0 0 0 0 0 1", "1.2 0 0 0 0 0 0 1", "1.1 0 0 0 0 0 0 1"], [":3: '1.1 0 0 0 0 0 0 1': the stamps go "

@@ -75,6 +75,7 @@ def test_reads_the_real_groundtruth_file(fetch_or_skip):
     [
         ("1.0 2 3\n", ":1: a TUM line has 8 numbers"),
         ("1.0 0 0 0 0 0 0 one\n", ":1: not a number"),
+        ("1.0 1_0 0 0 0 0 0 1\n", ":1: not a number"),
         ("# t x y z qx qy qz qw\n2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", ":3: '1 0 0 0 0 0 0 1': the stamps go backwards"),
         ("1 0 0 0 0 0 0 1\n\n2 0 0 0 0 0 0 0\n", ":3: '2 0 0 0 0 0 0 0': the quaternion .* has zero length"),
         ("1 0 0 0 0 0 0 1\n2 nan 0 0 0 0 0 1\n", ":2: '2 nan 0 0 0 0 0 1': positions and quaternions must be finite"),
@@ -109,6 +110,18 @@ def test_a_file_that_is_not_text_is_named_not_decoded(tmp_path):
         ("9" * 30, None),
         ("1e400", None),
         ("-1e19", None),
+        ("1700000000.0100000000.99", None),  # two decimal points: no number
+        ("1700000000.000000000abc", None),
+        ("1_700_000_000.5", None),  # Python's literal, not a number of a TUM file
+        ("\u0661\u0662", None),  # Arabic-Indic digits
+        ("0x10", None),
+        ("nan", None),
+        ("-inf", None),
+        ("1.5e+3", 1500 * 10**9),
+        ("1700000000.1234567891234", 1_700_000_000_123_456_789),  # to the nearest nanosecond
+        ("1700000000.1234567896", 1_700_000_000_123_456_790),
+        (".5", 500_000_000),
+        ("-0.000000001", -1),
     ],
 )
 def test_a_stamp_is_read_to_the_nanosecond_or_refused_with_its_line(tmp_path, stamp, read_ns):

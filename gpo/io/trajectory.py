@@ -5,19 +5,25 @@ A ``Trajectory`` holds the poses of one frame (``child_frame_id``, e.g. ``base_l
 orientations as unit quaternions in ROS order (x, y, z, w).
 
 TUM format: one pose per line, ``t tx ty tz qx qy qz qw``, t in seconds; lines starting with ``#``
-are comments. Stamps are written with all nine decimals, so a round trip keeps every nanosecond.
+are comments. Stamps are written with all nine decimals, so a round trip keeps every nanosecond. Each field read is
+a decimal number and nothing else (``NUMBER``): Python's own literals (``1_000``, ``0x10``) and other scripts' digits
+are not, nor is a stamp with anything after its digits.
 """
 
 from __future__ import annotations
 
-import math
+import re
 from dataclasses import dataclass
+from decimal import ROUND_HALF_EVEN, Decimal
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 NS_PER_S = 1_000_000_000
+NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+"""A field of a TUM line: a decimal number, with an exponent or not (NaN and infinity are read, then refused as not
+finite)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,10 +163,9 @@ class Trajectory:
                 raise ValueError(
                     f"{path}:{number}: the stamp {fields[0]!r} is not a time in seconds within 292 years of 1970"
                 ) from None
-            try:
-                pose = [float(v) for v in fields[1:]]
-            except ValueError:
-                raise ValueError(f"{path}:{number}: not a number in {line!r}") from None
+            if not all(NUMBER.fullmatch(v) for v in fields[1:]):
+                raise ValueError(f"{path}:{number}: not a number in {line!r}")
+            pose = [float(v) for v in fields[1:]]
             problem = _pose_problem(pose, stamp, stamps[-1] if stamps else None)
             if problem:
                 raise ValueError(f"{path}:{number}: {line!r}: {problem}")
@@ -190,20 +195,15 @@ def _what_it_is(path: Path) -> str:
 
 
 def _seconds_text_to_ns(text: str) -> int:
-    """Exact integer nanoseconds of a decimal number of seconds such as ``1403715273.262142976``; ValueError for text
-    that is no number, or a time int64 nanoseconds cannot hold (more than 292 years from 1970)."""
-    if "e" in text.lower():
-        seconds = float(text)
-        if not math.isfinite(seconds):
-            raise ValueError(text)
-        stamp = round(seconds * NS_PER_S)
-    else:
-        whole, _, fraction = text.partition(".")
-        sign = -1 if whole.startswith("-") else 1
-        fraction = (fraction + "000000000")[:9]
-        if not (whole.lstrip("+-").isdigit() or whole.lstrip("+-") == "") or not fraction.isdigit():
-            raise ValueError(text)
-        stamp = int(whole or "0") * NS_PER_S + sign * int(fraction)
+    """Integer nanoseconds of a decimal number of seconds such as ``1403715273.262142976``, to the nearest one (half
+    to even); ValueError for text that is no number (``NUMBER``), a number that is not finite, or a time int64
+    nanoseconds cannot hold (more than 292 years from 1970)."""
+    if not NUMBER.fullmatch(text):
+        raise ValueError(text)
+    seconds = Decimal(text)
+    if not seconds.is_finite() or seconds.adjusted() > 12:  # beyond 1e13 s: no int64 of nanoseconds
+        raise ValueError(text)
+    stamp = int((seconds * NS_PER_S).to_integral_value(ROUND_HALF_EVEN))
     if not -(2**63) <= stamp < 2**63:
         raise ValueError(text)
     return stamp
