@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 import pytest
 import yaml
+from fuzzing.bags import mcap_records, ros1_chunks
 
 import gpo.cli.calibrate
 import gpo.pipeline.odometer
@@ -257,6 +258,49 @@ def test_info_names_a_bag_cut_short_and_how_it_may_be_repaired(world, tmp_path, 
     cut = tmp_path / "cut.bag"
     cut.write_bytes(world.bag().read_bytes()[:5000])
     check(capsys, [tmp_path], ["info", cut], 1, "not a readable ros1 recording", "rosbag reindex")
+
+
+def _damage_the_second_half(path: Path, fmt: str) -> Path:
+    """The bag at ``path`` damaged past its first half, as a bad sector or a bad copy leaves it: an 8 KiB stretch of
+    the sqlite3 database's pages overwritten, the messages of the second chunk made another kind of record (ROS1),
+    or the length of the second chunk's first record 2**64 - 1 (MCAP)."""
+    storage = path if path.is_file() else next(p for p in path.iterdir() if p.suffix in (".db3", ".mcap"))
+    data = bytearray(storage.read_bytes())
+    if fmt == "ros2":
+        start = int(0.6 * len(data))
+        data[start : start + 8192] = b"\xa5" * 8192
+    elif fmt == "ros1":
+        _, chunk_data, end = ros1_chunks(bytes(data))[1]
+        data[chunk_data:end] = data[chunk_data:end].replace(b"op=\x02", b"op=\x09")
+    else:
+        second = [start for start, _ in mcap_records(bytes(data)) if data[start] == 0x06][1]
+        data[second + 50 : second + 58] = b"\xff" * 8  # past the chunk's own fields: its first record's length
+    storage.write_bytes(bytes(data))
+    return path
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "ros2", "ros2-mcap"])
+def test_a_bag_damaged_midway_names_the_bag_and_keeps_the_frames_before(world, tmp_path, capsys, fmt):
+    """A ROS 2 bag's sqlite3 database damaged (apsw's CorruptError) as a ROS 1 or MCAP bag's records: the same
+    words, naming the bag, and the frames read before the damage written, flagged."""
+    path = tmp_path / ("damaged.bag" if fmt == "ros1" else "damaged")
+    good = load_config(world.config)
+    whole = gpo.pipeline.run.run(write_bag(path, frames=40, fmt=fmt), good, progress=False).trajectory
+    _damage_the_second_half(path, fmt)
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root], ["run", path, "--config", world.config, "--out", out], 1, "stopped early after",
+          f"{path} is damaged", "the frames before were kept")
+    kept = Trajectory.read_tum(out)
+    assert 0 < len(kept) < 40 and summary(out)["stopped_early"].startswith(f"after {len(kept)} frames")
+    np.testing.assert_array_equal(kept.positions, whole.positions[: len(kept)])
+
+
+@pytest.mark.parametrize("nesting", ["[" * 5000 + "]" * 5000, "{a: " * 3000 + "1" + "}" * 3000])
+def test_a_ros2_bag_whose_metadata_nests_thousands_deep_is_named(world, tmp_path, capsys, nesting):
+    path = write_bag(tmp_path / "deep", frames=3, fmt="ros2")
+    metadata = path / "metadata.yaml"
+    metadata.write_text(metadata.read_text() + f"\nextra: {nesting}\n")
+    check(capsys, [tmp_path], ["info", path], 1, f"{path} is not a readable ros2-sqlite3 recording")
 
 
 def test_info_of_a_bag_whose_first_image_is_unreadable(world, capsys):

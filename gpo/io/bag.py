@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
+import apsw
 import cv2
 import numpy as np
 from rosbags import rosbag1, rosbag2
@@ -76,11 +77,14 @@ _FROM_BGR = {("bgr8", "rgb8"): cv2.COLOR_BGR2RGB, ("bgra8", "rgba8"): cv2.COLOR_
 
 _DAMAGED = (
     AnyReaderError, rosbag1.ReaderError, rosbag2.ReaderError, ValueError, KeyError, IndexError, TypeError,
-    AttributeError, AssertionError, OverflowError, EOFError, MemoryError, struct.error, sqlite3.Error,
+    AttributeError, AssertionError, OverflowError, EOFError, MemoryError, RecursionError, struct.error, sqlite3.Error,
+    apsw.Error,
 )
 """What rosbags raises reading the bytes of a damaged bag (cut short, bits flipped, records out of order, a topic
 declaring another type than its messages hold; found by tests/fuzzing), each turned into a ValueError naming the bag.
-A MemoryError comes of a length field read as gigabytes."""
+A MemoryError comes of a length field read as gigabytes, a RecursionError of a ROS 2 ``metadata.yaml`` nested
+thousands deep; a ROS 2 sqlite3 database is read through apsw, whose errors (``CorruptError``: "database disk image is
+malformed") are not sqlite3's."""
 
 
 class StampWarning(UserWarning):

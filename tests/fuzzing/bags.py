@@ -148,7 +148,7 @@ def mcap_records(content: bytes) -> list[tuple[int, int]]:
     return spans
 
 
-def _chunks(content: bytes) -> list[tuple[int, int, int]]:
+def ros1_chunks(content: bytes) -> list[tuple[int, int, int]]:
     """ROS1 chunk records (op 5): (record start, data start, end)."""
     found = []
     for start, end in ros1_records(content):
@@ -161,7 +161,7 @@ def _chunks(content: bytes) -> list[tuple[int, int, int]]:
 def record_starts(name: str, content: bytes) -> tuple[int, ...]:
     """Where the records of a bag file start (and a ROS1 chunk's inner records): the offsets worth hitting."""
     if name.endswith(".bag"):
-        inner = [s for _, data, _ in _chunks(content) for s, _ in ros1_records(content, data)]
+        inner = [s for _, data, _ in ros1_chunks(content) for s, _ in ros1_records(content, data)]
         return tuple(sorted({s for s, _ in ros1_records(content)} | set(inner) | {0}))
     if name.endswith(".mcap"):
         return (0, *(s for s, _ in mcap_records(content)))
@@ -174,7 +174,7 @@ def records_mutated(draw, mutant: Mutant) -> Mutant:
     name, content = next((n, c) for n, c in mutant.files if n.endswith((".bag", ".mcap")))
     region = (0, len(content))
     if name.endswith(".bag"):
-        chunks = _chunks(content)
+        chunks = ros1_chunks(content)
         if chunks and draw(st.booleans()):
             _, data, end = draw(st.sampled_from(chunks))
             region, spans = (data, end), ros1_records(content, data)
@@ -200,7 +200,7 @@ def records_mutated(draw, mutant: Mutant) -> Mutant:
             order[i], order[j] = order[j], order[i]
     changed = content[: spans[0][0]] + b"".join(pieces[k] for k in order) + content[spans[-1][1] :]
     if region != (0, len(content)):  # a chunk's data: its length field follows its new size
-        start = next(s for s, d, _ in _chunks(content) if d == region[0])
+        start = next(s for s, d, _ in ros1_chunks(content) if d == region[0])
         changed = bytearray(changed)
         struct.pack_into("<I", changed, region[0] - 4, region[1] - region[0] + len(changed) - len(content))
         changed = bytes(changed)
