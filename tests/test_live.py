@@ -2,6 +2,7 @@
 bag: the same floor records, the same fused path whatever order the two sources' messages arrive in; and the run on
 two threads against the run on one (``gpo.io.ahead``)."""
 
+import math
 import threading
 
 import numpy as np
@@ -11,7 +12,8 @@ from gpo.fusion import FusionSettings, StreamingFusion, fuse
 from gpo.io.ahead import read_ahead
 from gpo.io.bag import Recording
 from gpo.pipeline.config import load_config
-from gpo.pipeline.live import LiveOdometer
+from gpo.pipeline.live import LiveOdometer, RefusedMessage
+from gpo.pipeline.odometer import FloorOdometer
 from gpo.pipeline.run import run, tracking_mount
 from gpo.sim.record import recording
 
@@ -163,3 +165,119 @@ def test_read_ahead_keeps_the_order_raises_in_place_and_stops_its_thread():
     assert threading.active_count() == before
     with pytest.raises(ValueError, match="depth"):
         next(read_ahead([1], depth=0))
+
+
+# ------------------------------------------------------------------------------------- what the live face refuses
+
+DAY_NS = 86_400 * 10**9
+
+
+def _stream(config, mount, frames, tracking, refused=()) -> tuple[list, list]:
+    """A LiveOdometer of ``config`` fed the frames and tracking messages in stamp order (a tracking message before a
+    frame of its stamp), each call of ``refused`` (the odometer's method, its arguments, the words of its error) made
+    after the eleventh message; the floor records, and the x, y, theta of every fused pose settled."""
+    fused = []
+    odometer = LiveOdometer(config, mount, on_fused=fused.append)
+    messages = sorted([(stamp, 1, ("step", stamp, image)) for stamp, image in frames]
+                      + [(stamp, 0, ("track", stamp, p, q)) for stamp, p, q in tracking], key=lambda m: m[:2])
+    records = []
+    for number, (_, _, (kind, *arguments)) in enumerate(messages):
+        if kind == "step":
+            records.append(odometer.step(*arguments))
+        else:
+            odometer.track(*arguments)
+        if number == 10:
+            for method, bad, words in refused:
+                with pytest.raises(RefusedMessage) as raised:
+                    getattr(odometer, method)(*bad)
+                    pytest.fail(f"{method} took {bad!r:.200}")
+                for word in words:
+                    assert word in str(raised.value), f"{word!r} not in {raised.value}"
+    odometer.finish()
+    return records, [tuple(pose.pose) for pose in fused]
+
+
+def _bad_steps(config, frames) -> list:
+    """Calls of ``step`` with an argument that is no stamp or no frame, and the words of their refusals."""
+    stamp, image = frames[6]
+    height, width = image.shape
+    other = load_config().replace(method="features" if config.floor_method != "features" else "gpo-exact")
+    prepared = FloorOdometer(other).prepare(image)  # what the other kind of method makes of a frame
+    calls = [
+        ((math.nan, image), ["stamp_ns", "a whole number of nanoseconds", "nan"]),
+        ((None, image), ["stamp_ns", "None"]),
+        ((12.5, image), ["stamp_ns", "a whole number", "12.5"]),
+        ((True, image), ["stamp_ns", "True"]),
+        ((1e30, image), ["stamp_ns", "from 0 to"]),
+        ((10**30, image), ["stamp_ns", "from 0 to"]),
+        ((-1, image), ["stamp_ns", "from 0 to"]),
+        ((stamp + 2 * DAY_NS, image), ["stamp_ns", "more than a day", "after the last message"]),
+        ((stamp, None), ["image", "NoneType"]),
+        ((stamp, image.tolist()), ["image", "list"]),
+        ((stamp, np.zeros((), np.uint8)), ["image", "2-D", "shape ()"]),
+        ((stamp, np.zeros((0, 0), np.uint8)), ["image", f"{width} x {height}", "0 x 0"]),
+        ((stamp, image > 128), ["image", "uint8", "bool"]),
+        ((stamp, image.astype(np.float32)), ["image", "uint8", "float32"]),
+        ((stamp, np.dstack([image] * 3)), ["image", "2-D", f"shape ({height}, {width}, 3)"]),
+        ((stamp, image[:-2]), ["image", f"{width} x {height}", f"{width} x {height - 2}"]),
+        ((stamp, prepared), ["image", type(prepared).__name__]),
+    ]
+    return [("step", arguments, words) for arguments, words in calls]
+
+
+@pytest.mark.parametrize("method", ["gpo-exact", "features"])
+def test_a_refused_frame_leaves_the_odometer_as_it_was(messages, method):
+    """Each bad call raises RefusedMessage naming its argument and what was expected; the run around them gives the
+    records of the same frames given without them."""
+    frames, _, _ = messages
+    frames = frames[:16]
+    config = load_config().replace(method=method)
+    expected, _ = _stream(config, None, frames, [])
+    records, _ = _stream(config, None, frames, [], _bad_steps(config, frames))
+    assert records == expected and len(records) == 16
+    assert sum(r.status == "measured" for r in records) >= 12
+
+
+def test_a_refused_tracking_message_leaves_the_fused_odometer_as_it_was(messages):
+    frames, tracking, mount = messages
+    frames = frames[:16]
+    tracking = [message for message in tracking if message[0] <= frames[-1][0] + STEP_NS]
+    config = load_config().replace(method="fused")
+    stamp, position, orientation = tracking[40]
+    bad_tracks = [
+        ((stamp, position[:2], orientation), ["position", "3 numbers", "x, y, z"]),
+        ((stamp, [*position, 0.0], orientation), ["position", "3 numbers"]),
+        ((stamp, None, orientation), ["position", "None"]),
+        ((stamp, ["0.1", "0", "0"], orientation), ["position", "3 numbers"]),
+        ((stamp, [True, 0.0, 0.0], orientation), ["position", "3 numbers"]),
+        ((stamp, position, orientation[:3]), ["orientation", "4 numbers", "x, y, z, w"]),
+        ((stamp, position, [0.0, 0.0, 0.0, 0.0]), ["orientation", "length"]),
+        ((math.nan, position, orientation), ["stamp_ns", "nan"]),
+        ((stamp + 2 * DAY_NS, position, orientation), ["stamp_ns", "more than a day"]),
+    ]
+    refused = [("track", arguments, words) for arguments, words in bad_tracks] + _bad_steps(config, frames)
+    expected_records, expected = _stream(config, mount, frames, tracking)
+    records, fused = _stream(config, mount, frames, tracking, refused)
+    assert records == expected_records and fused == expected and len(fused) == 16
+
+
+def test_a_tracking_pose_that_is_not_finite_is_dropped_and_counted(messages):
+    _, tracking, mount = messages
+    odometer = LiveOdometer(load_config().replace(method="fused"), mount)
+    stamp, position, orientation = tracking[0]
+    odometer.track(stamp, [math.nan, 0.0, 0.0], orientation)
+    odometer.track(stamp + STEP_NS, position, [math.inf, 0.0, 0.0, 1.0])
+    assert odometer.fusion.dropped == {"tracking: pose not finite": 2}
+
+
+def test_the_live_odometer_refuses_what_is_no_config_mount_or_callback(messages):
+    _, _, mount = messages
+    config = load_config().replace(method="fused")
+    with pytest.raises(RefusedMessage, match="config: expected an OdometryConfig"):
+        LiveOdometer("robot.yaml")
+    with pytest.raises(RefusedMessage, match="tracking_mount: expected 3 numbers, the translation"):
+        LiveOdometer(config, (mount[0], [0.0, 0.0]))
+    with pytest.raises(RefusedMessage, match="on_fused: expected a callable"):
+        LiveOdometer(config, mount, on_fused="print")
+    with pytest.raises(RefusedMessage, match="fuses tracking messages"):
+        LiveOdometer(load_config()).track(0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))

@@ -142,24 +142,63 @@ class FloorOdometer:
         """The floor image (8-bit) of a grey frame (mono8, or mono16 taken to its upper 8 bits; ``Recording.frames``
         with ``gray=True`` turns colour to grey); for the ``keypoints`` route the 8-bit frame itself. A clear error
         when its size is not the calibration's."""
-        if image.shape[:2] != self._frame_shape:
+        if image.shape[:2] != self.frame_shape:
             raise ValueError(self._size_error(image.shape[1::-1]))
         if image.dtype == np.uint16:
             image = (image >> 8).astype(np.uint8)
         return image if self.config.route is Route.KEYPOINTS else self.table.apply(image)
 
     def _size_error(self, size: tuple[int, int]) -> str:
-        height, width = self._frame_shape
+        height, width = self.frame_shape
         return (
             f"the images are {size[0]} x {size[1]} pixels, but the camera of the config's rig "
             f"'{self.config.rig.name}' is {width} x {height}: wrong --topic, or a config of another camera"
         )
 
     @property
-    def _frame_shape(self) -> tuple[int, int]:
-        """(height, width) of the calibrated camera's frames."""
+    def frame_shape(self) -> tuple[int, int]:
+        """(height, width) of the calibrated camera's frames, pixels."""
         width, height = self.table.source_size
         return height, width
+
+    def refusal(self, image) -> str | None:
+        """What makes ``image`` nothing ``step`` takes, in words ("expected ..., got ..."), or None. ``step`` takes a
+        grey camera frame, a 2-D uint8 (or uint16: mono16) array of the calibration's size; what ``prepare`` makes of
+        one for this odometer's method (a ``FlowFrame`` of the floor image's size for the KLT methods, ``Keypoints``
+        for a keypoint method); or an ``Unreadable`` frame, which it skips. (``step`` itself skips a frame of another
+        size after the first, as a recording's reader flags one.)"""
+        height, width = self.frame_shape
+        frame = f"a grey camera frame, a 2-D uint8 (or uint16) array of {width} x {height} pixels (width x height)"
+        if isinstance(image, Unreadable):
+            return None
+        if isinstance(image, np.ndarray):
+            if image.ndim != 2 or image.dtype not in (np.uint8, np.uint16):
+                return f"expected {frame}, got a {image.dtype} array of shape {image.shape}"
+            if image.shape != (height, width):
+                return f"expected {frame}, got {image.shape[1]} x {image.shape[0]}"
+            return None
+        keypoints = self.estimator.MOTION == "keypoints"
+        if isinstance(image, Keypoints if keypoints else FlowFrame):
+            return self._prepared_refusal(image)
+        prepared = "Keypoints" if keypoints else "a FlowFrame"
+        return f"expected {frame}, {prepared} (what prepare makes of one) or Unreadable, got {type(image).__name__}"
+
+    def _prepared_refusal(self, prepared: FlowFrame | Keypoints) -> str | None:
+        """What makes ``prepared`` (of this odometer's kind) other than ``prepare`` makes it, or None."""
+        if isinstance(prepared, Keypoints):
+            counts = {len(prepared.points), len(prepared.descriptors), len(prepared.sizes)}
+            if len(counts) == 1 and prepared.points.shape[1:] == (2,):
+                return None
+            return (f"expected Keypoints of as many points (N, 2) as descriptors and sizes, got points of shape "
+                    f"{prepared.points.shape}, {len(prepared.descriptors)} descriptors, {len(prepared.sizes)} sizes")
+        shape = self.table.valid.shape
+        wide = None if self._overview_table is None else self._overview_table.valid.shape
+        if prepared.image.dtype != np.uint8 or prepared.image.shape != shape:
+            got = f"a {prepared.image.dtype} one of shape {prepared.image.shape}"
+            return f"expected a FlowFrame of a uint8 floor image of shape {shape}, got {got}"
+        if (None if prepared.overview is None else prepared.overview.shape) != wide:
+            return f"expected a FlowFrame whose overview (the whole-view check's) is of shape {wide}"
+        return None
 
     def keypoints(self, image: np.ndarray) -> Keypoints:
         """The keypoints of a camera frame as a keypoint estimator's tracker detects them (in the frame itself for the
@@ -175,7 +214,7 @@ class FloorOdometer:
         while the odometer steps through earlier ones (``gpo.pipeline.run.odometry`` with ``threads``)."""
         if not isinstance(image, np.ndarray):
             return image  # unreadable, or prepared already
-        if image.shape[:2] != self._frame_shape:
+        if image.shape[:2] != self.frame_shape:
             size = image.shape[1::-1]
             return OtherSize(f"{size[0]} x {size[1]} pixels, not the calibration's", size)
         if self.estimator.MOTION == "keypoints":
