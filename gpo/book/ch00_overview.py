@@ -1,5 +1,5 @@
-"""Chapter 00, the overview: the rig's view of the floor, how far it reaches, and a browser over a simulated
-recording."""
+"""Chapter 00, the overview: the rig's view of the floor, how far it reaches, the tracking camera's drift over seeds,
+one frame along the method, and a browser over a simulated recording."""
 
 from __future__ import annotations
 
@@ -8,6 +8,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from gpo.cameras.rig import Rig, floor_points, rays_in_base
+from gpo.floor_image.analytic import analytic_table
+from gpo.floor_image.cubemap import Cubemap
+from gpo.floor_image.image import FloorImage
 from gpo.io.bag import Recording
 from gpo.io.trajectory import base_from_sensor_odometry
 from gpo.sim.drift import tracking_odometry
@@ -67,6 +70,35 @@ def drift_by_seed(name: str = "sample", seeds=range(1, 13)) -> dict[int, float]:
         path = base_from_sensor_odometry(odometry, (mount.body_rotation, mount.position), start)
         errors[seed] = float(np.linalg.norm(path.positions[-1, :2] - truth.positions[-1, :2]))
     return errors
+
+
+def draw_method_preview(image: np.ndarray, rig: Rig, axes=None) -> np.ndarray:
+    """One fisheye frame along the method: the frame, its cubemap (chapter 02) and the top view of the floor patch
+    the method tracks (chapters 03-04; here from the calibration and the mount). Returns the three axes."""
+    if axes is None:
+        _, axes = plt.subplots(
+            1, 3, figsize=(13, 4.4), gridspec_kw={"width_ratios": [1.06, 1.0, 0.8]}, layout="constrained"
+        )
+    floor = FloorImage.top_view()
+    top_view = analytic_table(rig.camera, rig.mount, floor, cache=False).apply(image)
+    x_near, x_far, y_right, y_left = floor.extent
+    ticks = np.arange(-0.1, 1.0, 0.05)
+    shown = (
+        (image, "the fisheye's frame (chapter 01)", None),
+        (Cubemap(rig.camera).cross(image), "its cubemap (chapter 02)", None),
+        (top_view, "the floor ahead, from above (03-04)", (y_left, y_right, x_near, x_far)),
+    )
+    for ax, (picture, title, extent) in zip(axes, shown, strict=True):
+        ax.imshow(picture, cmap="gray", vmin=0, vmax=255, extent=extent)
+        ax.set_title(title, fontsize="medium")
+        if extent is None:
+            ax.axis("off")
+        else:
+            ax.set_xticks(ticks[(ticks >= y_right - 1e-9) & (ticks <= y_left + 1e-9)])
+            ax.set_yticks(ticks[(ticks >= x_near - 1e-9) & (ticks <= x_far + 1e-9)])
+            ax.set_xlabel("y, left [m]")
+            ax.set_ylabel("x, ahead [m]")
+    return axes
 
 
 def recording_browser(path, topic: str | None = None, ground_truth_topic: str = "/mocap/base_link") -> widgets.VBox:
