@@ -1,5 +1,5 @@
-"""Chapter 01, the EUCM camera model: a room's grid in the fisheye image, the projection curves, the field of
-view, and the model's panel."""
+"""Chapter 01, the EUCM camera model: a room's grid in the fisheye image, the projection curves, each pixel's ray
+angle, the field of view, and the model's panel."""
 
 from __future__ import annotations
 
@@ -102,6 +102,38 @@ def draw_projection_curves(cameras: dict[str, CameraModel], ax=None, max_angle_d
     ax.set_ylabel("image radius [px]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
+    return ax
+
+
+def draw_ray_angles(camera: CameraModel, ax=None, levels=(30, 60, 90, 120)) -> plt.Axes:
+    """Each pixel's ray (``camera.unproject``) as its angle off the optical axis, degrees, over the image, with
+    contours at ``levels``; pixels without a ray are left white. For an EUCM with alpha > 0.5, the dashed ellipse
+    bounds the pixels that have a ray (wherever it lies, in the image or beyond it)."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 6.4 * camera.height / camera.width))
+    rays, _ = camera.unproject(camera.pixel_grid())
+    angle = np.degrees(np.arccos(np.clip(rays[..., 2], -1.0, 1.0)))
+    extent = (-0.5, camera.width - 0.5, camera.height - 0.5, -0.5)
+    shown = ax.imshow(angle, cmap="viridis", extent=extent, vmin=0.0, vmax=180.0)
+    lines = ax.contour(
+        angle,
+        levels=list(levels),
+        colors="w",
+        linewidths=0.8,
+        extent=(0, camera.width - 1, 0, camera.height - 1),
+        origin="upper",
+    )
+    ax.clabel(lines, fmt="%d°", fontsize="small")
+    if isinstance(camera, EUCM) and camera.alpha > 0.5:
+        r_max = 1.0 / np.sqrt(camera.beta * (2.0 * camera.alpha - 1.0))
+        phi = np.linspace(0.0, 2.0 * np.pi, 361)
+        ax.plot(camera.cx + camera.fx * r_max * np.cos(phi), camera.cy + camera.fy * r_max * np.sin(phi), "k--", lw=0.8)
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_aspect("equal")
+    ax.set_xlabel("u [px]")
+    ax.set_ylabel("v [px]")
+    plt.colorbar(shown, ax=ax, label="angle off the optical axis [deg]", shrink=0.8)
     return ax
 
 
