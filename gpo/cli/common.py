@@ -1,11 +1,13 @@
-"""What every command shares: the exit codes, an option's positive number, a figure written through a temporary
-name."""
+"""What every command shares: the exit codes, how Ctrl-C and SIGTERM stop it (``Interruption``), an option's positive
+number, a figure written through a temporary name."""
 
 from __future__ import annotations
 
 import argparse
 import math
 import os
+import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -25,9 +27,32 @@ EXIT_CODES = """exit codes:
 INTERRUPTED = 130
 
 
+class Interruption:
+    """The handler of Ctrl-C (SIGINT) and SIGTERM while a command runs. The first raises KeyboardInterrupt where the
+    command is (a run then writes the frames it did, marked interrupted; the command exits ``INTERRUPTED``); every
+    later one is counted and waited out, so that what the first left to write is written whole whatever they do
+    (``kill -9`` still stops at once, and leaves the files already there whole: ``gpo.io.outputs``)."""
+
+    def __init__(self):
+        self.count = 0
+
+    def __call__(self, signum, frame) -> None:
+        self.count += 1
+        if self.count == 1:
+            raise KeyboardInterrupt
+        if self.count == 2:
+            print("interrupted again: what was computed is being written first (kill -9 stops at once, and leaves the "
+                  "files already there whole)", file=sys.stderr)
+
+
+def figure_writer(fig: Figure, dpi: int) -> Callable[[Path], object]:
+    """What writes ``fig`` at a path (of the suffix that names its format), as ``gpo.io.outputs`` writers do."""
+    return lambda path: fig.savefig(path, dpi=dpi, bbox_inches="tight")
+
+
 def save_figure(fig: Figure, path: Path, dpi: int) -> Path:
     """``fig`` written to ``path`` through a temporary name of the same suffix (which names the format)."""
-    return write_with(path, lambda temporary: fig.savefig(temporary, dpi=dpi, bbox_inches="tight"))
+    return write_with(path, figure_writer(fig, dpi))
 
 
 def positive(text: str) -> float:

@@ -6,10 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from gpo.cameras import EUCM, T265_LIKE, Pinhole
-from gpo.cli.common import save_figure
-from gpo.cli.evaluate import save_evaluation_plot
+from gpo.cli.common import figure_writer, save_figure
+from gpo.cli.evaluate import PLOT_DPI, evaluation_figure
 from gpo.io.bag import Recording
-from gpo.io.outputs import write_text, write_with
+from gpo.io.outputs import write_text, write_together, write_with
 from gpo.metrics import evaluate
 from gpo.pipeline.config import load_config
 from gpo.pipeline.run import run as run_odometry
@@ -103,7 +103,8 @@ def sample_recording_figures(out: Path) -> list[Path]:
 
 def sample_odometry(out: Path) -> list[Path]:
     """The sample recording's odometry, ``gpo-exact`` alone and fused with the tracking camera by the EKF (the last
-    files: ``sample_fused.evaluation.txt``, its evaluation table): trajectories, summaries, plots against truth."""
+    files: ``sample_fused.evaluation.txt``, its evaluation table): each run's trajectory, summary and plot against
+    the truth, written as one set."""
     from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
     bag = recording("sample")
@@ -112,9 +113,9 @@ def sample_odometry(out: Path) -> list[Path]:
     written = []
     for method, name in (("gpo-exact", "sample_gpo_exact"), ("fused", "sample_fused")):
         result = run_odometry(bag, load_config().replace(method=method), progress=False)
-        written += result.write(out / f"{name}.tum")
         evaluation = evaluate(result.trajectory, truth, "origin")
-        written.append(save_evaluation_plot(evaluation, out / f"{name}.png"))
+        plot = figure_writer(evaluation_figure(evaluation), PLOT_DPI)
+        written += write_together({**result.files(out / f"{name}.tum"), out / f"{name}.png": plot})  # one set
     written.append(out / "sample_fused.evaluation.txt")
     write_text(written[-1], f"EKF (gpo-exact + tracking camera) on the sample recording\n{evaluation.table()}\n")
     return written

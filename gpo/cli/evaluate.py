@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -14,8 +15,12 @@ from gpo.io.ros_messages import POSE_TYPES
 from gpo.io.trajectory import Trajectory
 from gpo.metrics import RPE_DELTA_M, Alignment, Evaluation, evaluate
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
 NAME = "evaluate"
 HELP = "errors of a TUM trajectory against the ground truth"
+PLOT_DPI = 110  # --plot's resolution, dots per inch
 
 
 def add_arguments(parser) -> None:
@@ -91,8 +96,12 @@ def read_tum(path: Path) -> Trajectory:
 
 
 def save_evaluation_plot(evaluation: Evaluation, out: Path) -> Path:
-    """A figure of both paths (the estimate aligned) and the position error along the truth's distance, written to
-    a temporary name and renamed to ``out`` (its suffix names the format)."""
+    """``evaluation_figure`` written to a temporary name and renamed to ``out`` (its suffix names the format)."""
+    return save_figure(evaluation_figure(evaluation), out, dpi=PLOT_DPI)
+
+
+def evaluation_figure(evaluation: Evaluation) -> Figure:
+    """A figure of both paths (the estimate aligned) and the position error along the truth's distance."""
     from matplotlib.figure import Figure
 
     from gpo.book.figures import draw_paths
@@ -106,7 +115,7 @@ def save_evaluation_plot(evaluation: Evaluation, out: Path) -> Path:
     errors.set_xlabel("distance travelled by the truth [m]")
     errors.set_ylabel("position error [mm]")
     errors.set_title(f"APE rmse {evaluation.ape_m.rmse * 1e3:.1f} mm, final {evaluation.final}", fontsize="small")
-    return save_figure(fig, out, dpi=110)
+    return fig
 
 
 def check_plot(path: Path, inputs: list[Path]) -> Path:

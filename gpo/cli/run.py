@@ -9,7 +9,7 @@ from pathlib import Path
 from gpo.cli.common import INTERRUPTED, available_cores, whole_number
 from gpo.io.bag import recording_format
 from gpo.io.bag_writer import check_new_bag, copy_with_trajectory
-from gpo.io.outputs import check_output, destination, write_with
+from gpo.io.outputs import check_output, destination, held_signals, write_together
 from gpo.pipeline.config import VECTORS, load_config, methods
 from gpo.pipeline.propose import config_from_bag
 from gpo.pipeline.run import OdometryResult, summary_path_of
@@ -57,6 +57,8 @@ def print_run(result: OdometryResult) -> None:
         print(f"flagged: {result.shortfall}; the trajectory is mostly coasted or held, not measured", file=sys.stderr)
     if result.interrupted:
         print(f"interrupted after {len(result.records)} frames; the frames before were kept", file=sys.stderr)
+        if "not_fused" in (result.fusion or {}):
+            print(f"not fused: {result.fusion['not_fused']}", file=sys.stderr)
     elif result.error and result.error.startswith("after"):
         print(f"stopped early {result.error}; the frames before were kept", file=sys.stderr)
     elif result.error:
@@ -64,7 +66,9 @@ def print_run(result: OdometryResult) -> None:
 
 
 def run(args) -> int:
-    """Everything checked, the odometry, then its files (see the module docstring)."""
+    """Everything checked, the odometry, then its files: the trajectory, its summary and the bag's copy replace the
+    files there as one set, or none of them does (``gpo.io.outputs.write_together``), Ctrl-C and SIGTERM held
+    meanwhile."""
     if args.config is None:
         config, origin = config_from_bag(args.bag, args.topic)
     else:
@@ -88,13 +92,14 @@ def run(args) -> int:
         check_output(out, inputs, "--out (beside it)")
         check_output(summary_path_of(out), inputs, "--out (beside it, its summary)")
         print(f"{args.out} is kept: this result is flagged and goes beside it (--force replaces it)", file=sys.stderr)
-    for path in result.write(out):
-        print(f"wrote {path}")
+    files = result.files(out)
     if args.write_bag and not result.flagged:
-        write_with(args.write_bag, lambda temporary: copy_with_trajectory(args.bag, temporary, result.trajectory))
-        print(f"wrote {args.write_bag} (/gpo/odom)")
+        files[args.write_bag] = lambda temporary: copy_with_trajectory(args.bag, temporary, result.trajectory)
     elif args.write_bag:
         print(f"{args.write_bag} not written: the result is flagged", file=sys.stderr)
+    with held_signals():  # what was computed is written whole: a signal meanwhile is met once it is
+        for path in write_together(files):
+            print(f"wrote {path}" + (" (/gpo/odom)" if path == args.write_bag else ""))
     if result.interrupted:
         return INTERRUPTED
     return 1 if result.flagged else 0

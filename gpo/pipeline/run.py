@@ -11,7 +11,8 @@ Every frame gets a ``FrameRecord``. A frame that cannot be measured is flagged w
 Frames whose stamp repeats or goes backwards are skipped; a gap longer than ``max_gap_s`` between frames is
 flagged, the pose held across it and tracking restarted after it. A frame that cannot be read (a corrupt JPEG, a
 short buffer, another size) is skipped and flagged with the reason, and the frames after it are read. ``run``
-returns what it computed when reading stops early, at Ctrl-C, or when the fusion fails (the result says which).
+returns what it computed when reading stops early, at Ctrl-C, or when the fusion fails (the result says which; a
+``fused`` run interrupted is the floor odometry alone, its summary's ``fusion`` says it was not fused).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import math
 import time
 import warnings
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,7 +35,7 @@ from gpo.cameras.rig import Rig
 from gpo.fusion import FilterDiverged, FusionSettings, fuse
 from gpo.io.ahead import read_ahead
 from gpo.io.bag import Recording, StampWarning
-from gpo.io.outputs import write_text, write_with
+from gpo.io.outputs import write_together
 from gpo.io.trajectory import Trajectory, base_from_sensor_odometry
 from gpo.motion.layers import slower_layer
 from gpo.pipeline.config import FUSED, OdometryConfig, load_config
@@ -177,12 +179,18 @@ class OdometryResult:
             **({"fusion": self.fusion} if self.fusion is not None else {}),
         }
 
+    def files(self, tum_path) -> dict[Path, Callable[[Path], object]]:
+        """The run's files by path, each with what writes it at a temporary path (``gpo.io.outputs.write_together``):
+        the trajectory as TUM at ``tum_path`` and the summary as YAML beside it (``summary_path_of``)."""
+        summary = yaml.safe_dump(self.summary(), sort_keys=False)
+        return {Path(tum_path): self.trajectory.write_tum,
+                summary_path_of(tum_path): lambda temporary: temporary.write_text(summary)}
+
     def write(self, tum_path) -> tuple[Path, Path]:
-        """Write the trajectory as TUM and the summary as YAML beside it (``summary_path``), each through a
-        temporary name (``gpo.io.outputs``); return both paths."""
-        tum_path = Path(tum_path)
-        summary_path = write_text(summary_path_of(tum_path), yaml.safe_dump(self.summary(), sort_keys=False))
-        return write_with(tum_path, self.trajectory.write_tum), summary_path
+        """Write the trajectory and its summary (``files``) as one set: both replace the files there, or neither
+        (``gpo.io.outputs.write_together``); return both paths."""
+        trajectory, summary = write_together(self.files(tum_path))
+        return trajectory, summary
 
 
 def summary_path_of(tum_path) -> Path:
@@ -203,8 +211,8 @@ def run(
     else its only image topic) on ``threads`` threads (``odometry``). The topic, and for ``fused`` the tracking
     camera's odometry and mount, are checked before the first frame. Returns what was computed even when reading
     stops early, is interrupted (Ctrl-C) or the fusion fails: then ``error`` or ``interrupted`` say so (nothing is
-    raised, so that the partial result, or the floor odometry alone, can be written). Unreadable frames are skipped
-    and flagged."""
+    raised, so that the partial result, or the floor odometry alone, can be written; a ``fused`` run interrupted is
+    not fused, and ``fusion["not_fused"]`` says so). Unreadable frames are skipped and flagged."""
     config = config or load_config()
     with Recording(bag) as recording, warnings.catch_warnings():
         warnings.simplefilter("ignore", StampWarning)  # each such frame is flagged in its record instead
@@ -222,7 +230,10 @@ def run(
             result = odometry(frames, config, str(bag), topic, threads)
         except ValueError as error:
             raise ValueError(f"{bag}, topic {topic}: {error}") from None
-        if config.method == FUSED and not result.interrupted:
+        if config.method == FUSED and result.interrupted:
+            result.fusion = {"not_fused": f"interrupted before the fusion: the trajectory is the floor odometry of "
+                                          f"{config.fusion.floor_method} alone, without the tracking camera"}
+        elif config.method == FUSED:
             _fuse_into(result, tracking, config.fusion, note)
             result.seconds = time.perf_counter() - started
     return result
