@@ -27,6 +27,7 @@ import yaml
 from fuzzing.bags import mcap_records, ros1_chunks
 
 import gpo.cli.calibrate
+import gpo.cli.run
 import gpo.pipeline.odometer
 import gpo.pipeline.run
 from gpo.cameras import T265_LIKE
@@ -371,20 +372,33 @@ def test_run_refuses_a_read_only_folder_before_working(world, tmp_path, capsys, 
           "cannot be written (read-only)")
 
 
-def test_a_full_disk_keeps_the_earlier_output_whole(world, tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize("stops", ["trajectory", "summary", "bag copy"])
+def test_a_full_disk_keeps_the_earlier_result_whole(world, tmp_path, capsys, monkeypatch, stops):
+    """The disk fills while the trajectory, its summary or the bag's copy is written: the earlier trajectory and its
+    summary stay, both (a new summary beside the old trajectory would no longer describe it)."""
     out = tmp_path / "traj.tum"
     out.write_text("# a good trajectory\n")
+    out.with_suffix(".summary.yaml").write_text("method: gpo-exact\n")
 
-    def full(self, path):
-        Path(path).write_text("half a tra")
+    write_text = Path.write_text
+
+    def full(path):
+        write_text(Path(path), "half a file")
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr(Trajectory, "write_tum", full)
-    _, err = check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out], 1,
-                   f"{out}: the disk is full", "the file already there is kept",
-                   changed=[out.with_suffix(".summary.yaml")])
-    assert out.read_text() == "# a good trajectory\n"
+    if stops == "trajectory":
+        monkeypatch.setattr(Trajectory, "write_tum", lambda self, path: full(path))
+    elif stops == "summary":
+        monkeypatch.setattr(Path, "write_text", lambda self, text, *args, **kwargs: full(self)
+                            if self.name.endswith(".summary.yaml") else write_text(self, text, *args, **kwargs))
+    else:
+        monkeypatch.setattr(gpo.cli.run, "copy_with_trajectory", lambda bag, path, trajectory: full(path))
+    named = {"trajectory": out, "summary": out.with_suffix(".summary.yaml"), "bag copy": tmp_path / "copy.bag"}
+    _, err = check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out,
+                                                    "--write-bag", tmp_path / "copy.bag"], 1,
+                   f"{named[stops]}: the disk is full", "the files already there are kept as they were")
     assert ".partial" not in err and "Errno" not in err  # the user's path, not the hidden temporary one
+    assert not (tmp_path / "copy.bag").exists()
 
 
 def test_write_bag_needs_room_for_the_copy(world, tmp_path, capsys, monkeypatch):
@@ -643,6 +657,74 @@ def test_a_signal_to_the_process_keeps_the_frames_done(world, tmp_path, signum):
     done = summary(out)
     assert done["interrupted"] is True and 0 < done["frames"] < 12
     assert len(Trajectory.read_tum(out)) == done["frames"]
+
+
+def _signal_after(count: int, signum: int):
+    """Frames as the bag holds them, the process sent ``signum`` as frame ``count`` is read."""
+    real = Recording.frames
+
+    def frames(self, *args, **kwargs):
+        for index, item in enumerate(real(self, *args, **kwargs)):
+            if index == count:
+                os.kill(os.getpid(), signum)
+            yield item
+
+    return frames
+
+
+@pytest.mark.parametrize("first", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("when", ["before the files", "while they are written"])
+def test_a_second_signal_never_costs_the_frames_done(world, tmp_path, capsys, monkeypatch, first, when):
+    """Two Ctrl-C (or SIGTERM) in quick succession: the second, before the partial result is written or while it
+    is, is waited out; the frames done are written whole and the run exits 130."""
+    whole = _path(world)
+    second = signal.SIGTERM if first == signal.SIGINT else signal.SIGINT
+    monkeypatch.setattr(Recording, "frames", _signal_after(5, first))
+    if when == "before the files":
+        shown = gpo.cli.run.print_run
+        monkeypatch.setattr(gpo.cli.run, "print_run", lambda result: (os.kill(os.getpid(), second), shown(result)))
+    else:
+        write_tum = Trajectory.write_tum
+        monkeypatch.setattr(Trajectory, "write_tum",
+                            lambda self, path: (os.kill(os.getpid(), second), write_tum(self, path))[1])
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", out, "--threads",
+                                           "1"], 130, "interrupted after 5 frames", f"wrote {out}")
+    assert summary(out)["interrupted"] is True
+    np.testing.assert_array_equal(Trajectory.read_tum(out).positions, whole.positions[:5])
+
+
+def test_an_interrupted_fused_run_says_it_was_not_fused(world, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(Recording, "frames", _stop_after(5, KeyboardInterrupt()))
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--method", "fused", "--out",
+                                           out], 130, "interrupted after 5 frames", "not fused: interrupted before "
+          "the fusion: the trajectory is the floor odometry of gpo-exact alone")
+    assert summary(out)["method"] == "fused" and "not_fused" in summary(out)["fusion"]
+    np.testing.assert_array_equal(Trajectory.read_tum(out).positions, _path(world).positions[:5])
+
+
+WHILE_IMPORTING = """
+import builtins, os, runpy, signal, sys
+signum, imported = int(sys.argv[1]), builtins.__import__
+
+def importing(name, *args, **kwargs):  # the signal as the command's modules import numpy, at its first instant
+    if name == "numpy" and "numpy" not in sys.modules:
+        os.kill(os.getpid(), signum)
+    return imported(name, *args, **kwargs)
+
+builtins.__import__ = importing
+sys.argv = ["gpo", *sys.argv[2:]]
+runpy.run_module("gpo", run_name="__main__", alter_sys=True)
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_the_command_starts_exits_130_without_a_traceback(world, signum):
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])}
+    done = subprocess.run([sys.executable, "-c", WHILE_IMPORTING, str(int(signum)), "info", str(world.bag())],
+                          capture_output=True, text=True, env=env, preexec_fn=_as_from_a_terminal, timeout=120)
+    assert done.returncode == 130 and done.stderr == "interrupted\n", (done.returncode, done.stderr)
 
 
 # ------------------------------------------------------------------------------------------------------ configs

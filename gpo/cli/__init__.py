@@ -49,7 +49,7 @@ from gpo.cli import (
     table3,
     table4,
 )
-from gpo.cli.common import EXIT_CODES, INTERRUPTED
+from gpo.cli.common import EXIT_CODES, INTERRUPTED, Interruption
 
 COMMANDS = (demo, simulate, info, sample_data, recording, calibrate, mount, config, run, table3, table4, table2,
             evaluate, sweep, sweep_report)
@@ -57,7 +57,37 @@ COMMANDS = (demo, simulate, info, sample_data, recording, calibrate, mount, conf
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Parse ``argv`` (default: the process's arguments), run the command, and return its exit code."""
+    """Parse ``argv`` (default: the process's arguments), run the command, and return its exit code. Ctrl-C and
+    SIGTERM (``Interruption``) end it with ``INTERRUPTED`` and no traceback, whenever they come."""
+    interruption = Interruption()
+    previous = {kind: signal.signal(kind, interruption) for kind in (signal.SIGINT, signal.SIGTERM)}
+    debug = False
+    try:
+        parser = _parser()
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exit:  # usage errors (2) and --help (0), returned like every other outcome
+            return exit.code if isinstance(exit.code, int) else 2
+        debug = args.debug
+        return args.run(args)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return INTERRUPTED
+    except Exception as error:
+        if debug:
+            raise
+        known = isinstance(error, ValueError | OSError | CalibrationError)
+        print(f"error: {error}" if known else f"error: {type(error).__name__}: {error}", file=sys.stderr)
+        if not known:
+            print("(--debug shows where it arose)", file=sys.stderr)
+        return 1
+    finally:
+        for kind, handler in previous.items():
+            signal.signal(kind, handler)
+
+
+def _parser() -> argparse.ArgumentParser:
+    """The command line's parser: ``--debug`` and a subcommand a module of ``COMMANDS``."""
     parser = argparse.ArgumentParser(
         prog="python -m gpo",
         description="visual odometry from the floor: the suite's commands",
@@ -69,28 +99,4 @@ def main(argv: list[str] | None = None) -> int:
     for command in COMMANDS:
         command.add_arguments(commands.add_parser(command.NAME, help=command.HELP))
         commands.choices[command.NAME].set_defaults(run=command.run)
-    try:
-        args = parser.parse_args(argv)
-    except SystemExit as exit:  # usage errors (2) and --help (0), returned like every other outcome
-        return exit.code if isinstance(exit.code, int) else 2
-    previous = signal.signal(signal.SIGTERM, _interrupt)
-    try:
-        return args.run(args)
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return INTERRUPTED
-    except Exception as error:
-        if args.debug:
-            raise
-        known = isinstance(error, ValueError | OSError | CalibrationError)
-        print(f"error: {error}" if known else f"error: {type(error).__name__}: {error}", file=sys.stderr)
-        if not known:
-            print("(--debug shows where it arose)", file=sys.stderr)
-        return 1
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
-def _interrupt(signum, frame):
-    """SIGTERM handled as Ctrl-C: a run keeps and writes what it computed."""
-    raise KeyboardInterrupt
+    return parser
