@@ -401,6 +401,22 @@ def test_a_full_disk_keeps_the_earlier_result_whole(world, tmp_path, capsys, mon
     assert not (tmp_path / "copy.bag").exists()
 
 
+def test_a_full_cache_is_named_and_the_run_goes_on(world, tmp_path, capsys, monkeypatch):
+    """The floor image's remap table, built, cannot be kept in the cache: the run uses it, says which folder is full,
+    and writes its trajectory, the same as with room."""
+    cache_folder = tmp_path / "cache"
+    monkeypatch.setenv("GPO_CACHE_DIR", str(cache_folder))
+
+    def full(path, **arrays):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(np, "savez", full)
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root], ["run", world.bag(), "--config", world.config, "--out", out], 0,
+          f"the cache folder {cache_folder} is full", "was not kept", f"wrote {out}")
+    np.testing.assert_array_equal(Trajectory.read_tum(out).positions, _path(world).positions)
+
+
 def test_write_bag_needs_room_for_the_copy(world, tmp_path, capsys, monkeypatch):
     monkeypatch.setattr("shutil.disk_usage", lambda path: SimpleNamespace(total=10**9, used=10**9, free=1000))
     check(capsys, [world.root, tmp_path], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "t.tum",

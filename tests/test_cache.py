@@ -2,10 +2,15 @@
 a recording, table or floor run damaged after it was made (cut short, a bit turned) is made again, never read."""
 
 import dataclasses
+import errno
 import hashlib
 import io
 import json
+import logging
 import os
+import subprocess
+import sys
+import time
 import zlib
 from pathlib import Path
 
@@ -17,7 +22,7 @@ import gpo.experiments.runs as experiment_runs
 from gpo.experiments.runs import floor_run, route_config
 from gpo.floor_image.analytic import analytic_table
 from gpo.floor_image.image import FloorImage
-from gpo.io import cache, checksum, datasets
+from gpo.io import cache, checksum, datasets, partial
 from gpo.io.fingerprint import sources as module_sources
 from gpo.sim import record
 from gpo.sim.plans import MotionPlan
@@ -92,6 +97,78 @@ def test_a_failed_write_leaves_nothing(tmp_path):
     with pytest.raises(OSError, match="disk full"):
         cache.write(target, fail)
     assert list(target.parent.iterdir()) == []
+
+
+def _ended_process() -> int:
+    """The id of a process that ran here and has ended."""
+    process = subprocess.Popen([sys.executable, "-c", "pass"])
+    process.wait()
+    return process.pid
+
+
+def test_what_killed_writes_left_goes_the_next_time_the_cache_is_written(tmp_path, monkeypatch):
+    """A write killed before its rename (kill -9) leaves its partial file or folder, and its seal's; the next write
+    into the cache removes those of a process that ended here, of another machine's left unchanged for an hour, and of
+    the earlier form of the name (the process alone); it leaves those of writes that may still be at work."""
+    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path))
+    ended, host, old = _ended_process(), partial.HOST, time.time() - partial.STALE_S - 60
+    left = {
+        "recordings": [f"bag-0123-partial-{host}-{ended}.bag", f"ros2-0123-partial-{host}-{ended}",
+                       f"bag-0123.bag.crc32-partial-{host}-{ended}", f"bag-4567-partial-{ended}.bag"],
+        "tables": [f"table-0123-partial-elsewhere-{ended}.npz"],
+    }
+    kept = {"recordings": [f"bag-89ab-partial-{host}-{os.getpid()}.bag", f"bag-cdef-partial-elsewhere-{ended}.bag"]}
+    for kind, names in [*left.items(), *kept.items()]:
+        for name in names:
+            path = cache.folder(kind) / name
+            path.parent.mkdir(parents=True, exist_ok=True)
+            if name.startswith("ros2"):
+                path.mkdir()
+                (path / "data.db3").write_bytes(b"x" * 100)
+            else:
+                path.write_bytes(b"x" * 100)
+    for name in (f"table-0123-partial-elsewhere-{ended}.npz",):
+        os.utime(cache.folder("tables") / name, (old, old))
+    os.utime(cache.folder("recordings") / f"bag-4567-partial-{ended}.bag", (old, old))
+    cache.write(cache.path("runs", "run", "0123456789abcdef", ".npz"), lambda p: np.savez(p, value=np.arange(3)))
+    assert sorted(p.name for p in cache.folder("recordings").iterdir()) == sorted(kept["recordings"])
+    assert list(cache.folder("tables").iterdir()) == []
+
+
+def test_a_partial_file_still_written_counts_toward_the_cache_s_size(tmp_path, monkeypatch):
+    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(cache, "MAX_BYTES", 2500)
+    older = cache.path("recordings", "older", "0123456789abcdef", ".bin")
+    older.parent.mkdir(parents=True)
+    older.write_bytes(b"x" * 1000)
+    os.utime(older, (1e9, 1e9))
+    at_work = cache.folder("recordings") / f"bag-89ab-partial-{partial.HOST}-{os.getpid()}.bag"
+    at_work.write_bytes(b"x" * 1000)  # a render still at work, here
+    new = cache.write(cache.path("recordings", "new", "fedcba9876543210", ".bin"), lambda p: p.write_bytes(b"y" * 1000))
+    assert not older.exists() and at_work.exists() and new.exists()  # 3000 bytes with the partial: the oldest goes
+
+
+def test_a_full_cache_is_named_and_what_was_computed_is_still_used(tmp_path, monkeypatch, caplog):
+    """A remap table built while the cache's disk is full is used, not kept; the message names the cache folder. A
+    file that cannot be had without keeping it (a recording) is an error naming the folder."""
+    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path))
+
+    def full(path, **arrays):
+        Path(path).write_bytes(b"half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(np, "savez", full)
+    rig = t265_rig()
+    floor = FloorImage.top_view(metres_per_pixel=4e-3)
+    with caplog.at_level(logging.WARNING, logger="gpo.io.cache"):
+        table = analytic_table(rig.camera, rig.mount, floor)
+    built = analytic_table(rig.camera, rig.mount, floor, cache=False)
+    np.testing.assert_array_equal(table.map_x, built.map_x)
+    assert f"the cache folder {tmp_path} is full" in caplog.text and f"table-{table.key}.npz was not kept" in caplog.text
+    assert list(cache.folder("tables").iterdir()) == []
+    with pytest.raises(OSError, match=rf"the cache folder {tmp_path} is full .*bag-0123\.bag could not be kept"):
+        cache.write(cache.path("recordings", "bag", "0123", ".bag"), lambda p: full(p))
+    assert list(cache.folder("recordings").iterdir()) == []
 
 
 def test_tables_and_downloads_live_under_the_one_variable(tmp_path, monkeypatch):

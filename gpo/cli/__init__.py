@@ -28,6 +28,7 @@ simulator, matplotlib, Dask) inside its ``run``, so that every command starts qu
 from __future__ import annotations
 
 import argparse
+import logging
 import signal
 import sys
 
@@ -58,9 +59,14 @@ COMMANDS = (demo, simulate, info, sample_data, recording, calibrate, mount, conf
 
 def main(argv: list[str] | None = None) -> int:
     """Parse ``argv`` (default: the process's arguments), run the command, and return its exit code. Ctrl-C and
-    SIGTERM (``Interruption``) end it with ``INTERRUPTED`` and no traceback, whenever they come."""
+    SIGTERM (``Interruption``) end it with ``INTERRUPTED`` and no traceback, whenever they come; what gpo's modules
+    log as warnings is printed on stderr, a line each."""
     interruption = Interruption()
     previous = {kind: signal.signal(kind, interruption) for kind in (signal.SIGINT, signal.SIGTERM)}
+    warning_lines = logging.StreamHandler(sys.stderr)  # what gpo's modules warn of (a full cache), a line each
+    warning_lines.setLevel(logging.WARNING)
+    warning_lines.setFormatter(logging.Formatter("warning: %(message)s"))
+    logging.getLogger("gpo").addHandler(warning_lines)
     debug = False
     try:
         parser = _parser()
@@ -82,6 +88,7 @@ def main(argv: list[str] | None = None) -> int:
             print("(--debug shows where it arose)", file=sys.stderr)
         return 1
     finally:
+        logging.getLogger("gpo").removeHandler(warning_lines)
         for kind, handler in previous.items():
             signal.signal(kind, handler)
 

@@ -64,7 +64,7 @@ def route_config(method: str, route: str, base: OdometryConfig | None = None) ->
 
 def floor_run(bag, config: OdometryConfig, cache: bool = True) -> FloorRun:
     """The ``FloorRun`` of ``gpo.pipeline.run`` of ``bag`` with ``config`` (a floor method), read from the disk cache
-    when kept."""
+    when kept, else run and kept there (on a full disk, returned without being kept)."""
     path = _run_path(Path(bag), config)
     if cache and gpo.io.cache.intact(path):
         with np.load(path) as kept:
@@ -85,7 +85,7 @@ def floor_run(bag, config: OdometryConfig, cache: bool = True) -> FloorRun:
             "frames_per_second": done.frames_per_second,
             "spread_px": done.spread_px,
         }
-        gpo.io.cache.write(path, lambda partial: np.savez(partial, **arrays))
+        gpo.io.cache.keep(path, lambda partial: np.savez(partial, **arrays))
     return done
 
 

@@ -244,7 +244,8 @@ def _load(path: Path) -> ExperimentRun | None:
 
 
 def _save(path: Path, run: ExperimentRun) -> None:
-    """Keep ``run`` in the cache file ``path`` (``gpo.io.cache.write``: a name of its own, then renamed)."""
+    """Keep ``run`` in the cache file ``path`` (``gpo.io.cache.keep``: a name of its own, then renamed; on a full disk,
+    not kept)."""
     planar, truth = (np.column_stack([t.positions[:, :2], t.yaw]) for t in (run.trajectory, run.truth))
     arrays = {
         "stamps_ns": run.trajectory.stamps_ns,
@@ -254,7 +255,7 @@ def _save(path: Path, run: ExperimentRun) -> None:
         "truth_stamps_ns": run.truth.stamps_ns,
         "truth_poses": truth,
     }
-    gpo.io.cache.write(path, lambda partial: np.savez(partial, **arrays))
+    gpo.io.cache.keep(path, lambda partial: np.savez(partial, **arrays))
 
 
 def _run_path(bag: Path, chosen: Experiment, config: OdometryConfig) -> Path:

@@ -216,7 +216,7 @@ def table_key(description: dict) -> str:
 
 def cached_table(description: dict, floor: FloorImage, camera, build: Callable, keep: bool) -> RemapTable:
     """The table of ``description``: read from the disk cache (``gpo.io.cache``, ``tables``) when there, else
-    ``build()`` -> (fisheye uv, valid) and, with ``keep``, kept there."""
+    ``build()`` -> (fisheye uv, valid) and, with ``keep``, kept there (on a full disk, used without being kept)."""
     key = table_key({**description, "floor": floor.description(), "camera": _camera_description(camera)})
     path = gpo.io.cache.path("tables", "table", key, ".npz")
     if keep and gpo.io.cache.intact(path):
@@ -227,7 +227,7 @@ def cached_table(description: dict, floor: FloorImage, camera, build: Callable, 
     table = RemapTable.from_points(*build(), floor, camera, key)
     if keep:
         arrays = {"map_x": table.map_x, "map_y": table.map_y, "valid": table.valid}
-        gpo.io.cache.write(path, lambda partial: np.savez(partial, **arrays))
+        gpo.io.cache.keep(path, lambda partial: np.savez(partial, **arrays))
     return table
 
 

@@ -13,9 +13,10 @@ against accidents, not against someone forging a file (a content's identity, suc
 
 from __future__ import annotations
 
-import os
 import zlib
 from pathlib import Path
+
+from gpo.io import partial
 
 SUFFIX = ".crc32"
 """What a seal's name adds to the name of what it seals."""
@@ -57,9 +58,13 @@ def seal(path, of=None) -> Path:
     if of is not None and not Path(of).is_dir():
         found = {path.name: found[Path(of).name]}
     target = seal_path(path)
-    partial = target.with_name(f"{target.name}-partial-{os.getpid()}")
-    partial.write_text("".join(f"{crc:08x} {size} {name}\n" for name, (crc, size) in found.items()))
-    partial.replace(target)
+    work = target.with_name(f"{target.name}-partial-{partial.tag()}")
+    try:
+        work.write_text("".join(f"{crc:08x} {size} {name}\n" for name, (crc, size) in found.items()))
+        work.replace(target)
+    except BaseException:
+        work.unlink(missing_ok=True)
+        raise
     return target
 
 

@@ -19,8 +19,9 @@ from pathlib import Path
 
 HOST = re.sub(r"\W", "_", socket.gethostname()) or "host"
 """This machine's name as a partial's name holds it: letters, digits and underscores."""
-TAG = r"(?P<host>\w+)-(?P<pid>\d+)"
-"""The writer in a partial's name, as a regular expression: its machine and process id."""
+TAG = r"(?:(?P<host>\w+)-)?(?P<pid>\d+)"
+"""The writer in a partial's name, as a regular expression: its machine and process id (the machine is missing from
+the names of earlier versions)."""
 STALE_S = 3600.0
 """A partial of another machine's process, unchanged for this long (seconds), was left by a write that stopped."""
 
@@ -30,10 +31,10 @@ def tag() -> str:
     return f"{HOST}-{os.getpid()}"
 
 
-def abandoned(host: str, pid: int, path: Path, now: float | None = None) -> bool:
+def abandoned(host: str | None, pid: int, path: Path, now: float | None = None) -> bool:
     """Whether the partial ``path`` of process ``pid`` on machine ``host`` was left by a write that will not finish:
-    on this machine, its process is not running; on another (a folder shared by several), nothing of it changed for
-    ``STALE_S`` seconds (``now``: the time to measure from, default now)."""
+    on this machine, its process is not running; on another (a folder shared by several), or an unnamed one (None),
+    nothing of it changed for ``STALE_S`` seconds (``now``: the time to measure from, default now)."""
     if host == HOST:
         return not _running(pid)
     try:
