@@ -121,17 +121,21 @@ def test_a_set_whose_writer_was_killed_is_whole_the_next_time_its_folder_is_used
 
 
 def test_a_partial_folder_of_a_writer_still_at_work_is_left_alone(tmp_path):
-    own = tmp_path / f".t.tum.{partial.HOST}-{os.getpid()}.partial"  # this process: at work
-    elsewhere = tmp_path / f".u.tum.{partial.HOST}x-{os.getpid()}.partial"  # another machine's, just written
-    stale = tmp_path / f".v.tum.{partial.HOST}x-{os.getpid()}.partial"  # another machine's, untouched for long
-    for folder in (own, elsewhere, stale):
+    """This process's, and another machine's (or an earlier version's, which named no machine) unless unchanged for
+    an hour."""
+    own = tmp_path / f".t.tum.{partial.HOST}-{os.getpid()}.partial"
+    elsewhere = tmp_path / f".u.tum.{partial.HOST}x-{os.getpid()}.partial"
+    stale = tmp_path / f".v.tum.{partial.HOST}x-{os.getpid()}.partial"
+    earlier = tmp_path / f".w.tum.{os.getpid()}.partial"
+    earlier_stale = tmp_path / f".x.tum.{os.getpid()}.partial"
+    for folder in (own, elsewhere, stale, earlier, earlier_stale):
         folder.mkdir()
         (folder / "x").write_text("half")
     old = time.time() - partial.STALE_S - 60
-    for path in (stale / "x", stale):
+    for path in (stale / "x", stale, earlier_stale / "x", earlier_stale):
         os.utime(path, (old, old))
-    assert clear_abandoned(tmp_path) == [stale]
-    assert own.is_dir() and elsewhere.is_dir() and not stale.exists()
+    assert clear_abandoned(tmp_path) == [stale, earlier_stale]
+    assert [path.name for path in sorted(tmp_path.iterdir())] == [own.name, elsewhere.name, earlier.name]
 
 
 def test_a_rename_that_fails_puts_the_old_set_back_and_the_new_one_beside_it(tmp_path, monkeypatch):
