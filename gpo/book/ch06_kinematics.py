@@ -216,3 +216,64 @@ def increments_table(increments: dict) -> str:
         values = 1e3 * np.array([increment[0], increment[1], np.degrees(increment[2])])
         lines.append(f"{label:20}" + "".join(f"{value:15.4f}" for value in values))
     return "\n".join(lines)
+
+
+SPIN_RATE_HZ = 30.0  # the simulated spin's frame rate
+_SPIN_PATCH_PX, _SPIN_PIXEL_M, _SPIN_AHEAD_M = 200, 1e-3, 0.8  # a 0.2 m floor image of 1 mm pixels, 0.8 m ahead
+_SPIN_WORLD_PX, _SPIN_ORIGIN_PX = 1600, 200  # the floor's texture (1 mm texels), and where base_link starts in it
+
+
+def spin_poses(frames: int = 30, blend: int = 10, turn_radps: float = 0.5, speed_mps: float = 0.36) -> np.ndarray:
+    """base_link's poses (2 ``frames``, 3) at ``SPIN_RATE_HZ``: a turn on the spot at ``turn_radps``, then straight
+    ahead at ``speed_mps``, the one blended into the other over ``blend`` frames (no jump in the floor's speed)."""
+    from gpo.odometry.kinematics import compose
+
+    poses, pose = [], np.zeros(3)
+    for k in range(2 * frames):
+        poses.append(pose)
+        ahead = np.clip((k - frames + blend / 2) / blend, 0.0, 1.0)
+        pose = compose(pose, [ahead * speed_mps / SPIN_RATE_HZ, 0.0, (1 - ahead) * turn_radps / SPIN_RATE_HZ])
+    return np.array(poses)
+
+
+def spin_images(camera_pixel_px: tuple[int, int], seed: int = 0) -> tuple[list[np.ndarray], np.ndarray]:
+    """The floor images (200 x 200, 1 mm pixels, centred 0.8 m ahead of the rear axle) of a robot driving
+    ``spin_poses()`` over a grainy floor, and those poses. Each image is made as a camera makes it: the floor sampled
+    once per camera pixel, which covers ``camera_pixel_px`` (along the line of sight, across) floor-image pixels, with
+    its own noise (3 grey levels, drawn from ``seed``), then resampled to the floor image's pixels. (1, 1) is a camera
+    as fine as the floor image; the simulated T265 rig's pixels cover up to about (3, 1) at its patch's far edge."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    grain = cv2.GaussianBlur(
+        np.random.default_rng(0).normal(0.0, 1.0, (_SPIN_WORLD_PX, _SPIN_WORLD_PX)).astype(np.float32), (0, 0), 3.0
+    )
+    floor = cv2.normalize(grain, None, 30, 220, cv2.NORM_MINMAX)
+    rows, columns = _SPIN_PATCH_PX // camera_pixel_px[0], _SPIN_PATCH_PX // camera_pixel_px[1]
+    v, u = np.meshgrid(
+        (np.arange(rows) + 0.5) * _SPIN_PATCH_PX / rows - 0.5,
+        (np.arange(columns) + 0.5) * _SPIN_PATCH_PX / columns - 0.5,
+        indexing="ij",
+    )
+    x, y = spin_pixels_to_base(np.column_stack([u.ravel(), v.ravel()])).T.reshape(2, rows, columns)
+    poses, images = spin_poses(), []
+    for pose in poses:
+        cos, sin = np.cos(pose[2]), np.sin(pose[2])
+        world = [
+            (pose[i] + a * x + b * y) / _SPIN_PIXEL_M + _SPIN_ORIGIN_PX for i, a, b in ((0, cos, -sin), (1, sin, cos))
+        ]
+        seen = cv2.remap(floor, *(w.astype(np.float32) for w in world), cv2.INTER_LINEAR)
+        seen += rng.normal(0.0, 3.0, seen.shape).astype(np.float32)
+        resampled = cv2.resize(seen, (_SPIN_PATCH_PX, _SPIN_PATCH_PX), interpolation=cv2.INTER_LINEAR)
+        images.append(np.clip(resampled, 0, 255).astype(np.uint8))
+    return images, poses
+
+
+def spin_pixels_to_base(pixels) -> np.ndarray:
+    """Pixels (N, 2) (u right, v down) of ``spin_images``' floor images to floor points (N, 2) in base_link, metres:
+    the image's up is forward, its right the robot's right."""
+    pixels = np.asarray(pixels, dtype=float)
+    centre = _SPIN_PATCH_PX / 2
+    return np.column_stack(
+        [_SPIN_AHEAD_M + (centre - pixels[:, 1]) * _SPIN_PIXEL_M, (centre - pixels[:, 0]) * _SPIN_PIXEL_M]
+    )
