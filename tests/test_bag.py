@@ -5,6 +5,7 @@ times, other drivers' camera models) are written with rosbags alone, so the read
 against an independent writer too.
 """
 
+import errno
 import logging
 import re
 from contextlib import contextmanager
@@ -588,6 +589,28 @@ def test_a_truncated_recording_is_refused_with_its_path(tmp_path, bag_format):
         Recording(path)
     assert str(path) in str(error.value)
     assert isinstance(error.value.__cause__, Exception)
+
+
+@pytest.mark.parametrize("bag_format", FORMATS)
+def test_an_os_error_of_reading_the_messages_names_the_bag(tmp_path, monkeypatch, bag_format):
+    """A damaged offset can send the reader's seek past what the file system allows (the fuzzing campaign: an MCAP
+    chunk index's offset, OSError EINVAL): the bag is named, as for any other damage, after the frames before it."""
+    path = bag_path(tmp_path, bag_format)
+    with BagWriter(path, bag_format) as writer:
+        for i in range(3):
+            writer.add_image("/camera", T0 + i * PERIOD, np.full((64, 64), i, np.uint8), CAMERA_FRAME)
+    with Recording(path) as bag:
+        messages = bag.reader.messages
+
+        def seek_refused(*args, **kwargs):
+            yield next(iter(messages(*args, **kwargs)))
+            raise OSError(errno.EINVAL, "Invalid argument")
+
+        monkeypatch.setattr(bag.reader, "messages", seek_refused)
+        frames = bag.frames("/camera", progress=False)
+        assert next(frames).image[0, 0] == 0
+        with pytest.raises(ValueError, match=rf"^{re.escape(str(path))} is damaged or cannot be read: Invalid argument"):
+            next(frames)
 
 
 @pytest.mark.parametrize("bag_format", FORMATS)

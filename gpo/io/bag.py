@@ -368,6 +368,8 @@ class Recording:
                 yield connection, log_ns, raw
         except _DAMAGED as error:
             raise ValueError(f"{self.path} is damaged: {type(error).__name__}: {error}") from error
+        except OSError as error:  # a damaged offset sought past what the file system allows, or a failing disk
+            raise ValueError(f"{self.path} is damaged or cannot be read: {error.strerror or error}") from error
 
     def _messages(self, connections) -> Iterator[object]:
         """The deserialised messages of ``connections`` in bag order."""
