@@ -41,8 +41,13 @@ def campaign(target: Target, examples: int, chosen_seed: int) -> tuple[Counter, 
     counts, findings, slowest = Counter(), [], [0.0]
 
     @seed(chosen_seed)
-    @settings(max_examples=examples, database=None, deadline=None, phases=[Phase.generate],
-              suppress_health_check=list(HealthCheck))
+    @settings(
+        max_examples=examples,
+        database=None,
+        deadline=None,
+        phases=[Phase.generate],
+        suppress_health_check=list(HealthCheck),
+    )
     @given(target.mutants)
     def run(mutant: Mutant) -> None:
         started = time.perf_counter()
@@ -89,8 +94,11 @@ def replay(folder: Path) -> int:
     """Read a kept input again with its target and print what happens."""
     how = dict(line.split(": ", 1) for line in (folder / "how.txt").read_text().splitlines()[:3])
     target = TARGETS[how["target"]]
-    files = tuple((str(p.relative_to(folder)), p.read_bytes()) for p in sorted(folder.rglob("*"))
-                  if p.is_file() and p.name not in ("how.txt", "finding.txt"))
+    files = tuple(
+        (str(p.relative_to(folder)), p.read_bytes())
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and p.name not in ("how.txt", "finding.txt")
+    )
     result, finding = examine(target, Mutant(how["seed"], files, how["entry"]), unclear=True)
     print(f"{target.name}: {type(result).__name__}: {str(result)[:2000]}")
     print("no finding" if finding is None else f"{finding.kind}:\n{finding.detail}")
@@ -100,8 +108,9 @@ def replay(folder: Path) -> int:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--examples", type=int, default=800, help="inputs per reader and seed (default 800)")
-    parser.add_argument("--seed", type=int, nargs="+", default=[0], help="hypothesis's seeds, one after another "
-                        "(default 0)")
+    parser.add_argument(
+        "--seed", type=int, nargs="+", default=[0], help="hypothesis's seeds, one after another (default 0)"
+    )
     parser.add_argument("--target", action="append", choices=list(TARGETS), help="a reader (default: all)")
     parser.add_argument("--out", type=Path, help="where findings' inputs go (default: a new temporary folder)")
     parser.add_argument("--replay", type=Path, help="a kept input's folder: read it again")
@@ -121,9 +130,11 @@ def main() -> int:
             slowest = max(slowest, seed_slowest)
         totals.update(counts)
         kinds = ", ".join(f"{kind} {counts[kind]}" for kind in KINDS)
-        print(f"\n{name}: {counts['tried']} inputs (seeds {seeds}), {counts['read']} read whole, {counts['refused']} "
-              f"refused (in part or whole); findings {len(findings)}: {kinds}; slowest {slowest:.2f} s, "
-              f"{time.perf_counter() - begun:.0f} s in all")
+        print(
+            f"\n{name}: {counts['tried']} inputs (seeds {seeds}), {counts['read']} read whole, {counts['refused']} "
+            f"refused (in part or whole); findings {len(findings)}: {kinds}; slowest {slowest:.2f} s, "
+            f"{time.perf_counter() - begun:.0f} s in all"
+        )
         seen = {}
         for finding in findings:
             seen.setdefault(signature(finding), []).append(finding)
@@ -135,10 +146,12 @@ def main() -> int:
             failing += alike[0].kind in FAILING
             print(f"  {len(alike)} x {place}\n    reproduce: python benchmarks/fuzz_campaign.py --replay {folder}")
     unclear = totals["unclear error"] - totals["unclear, left to the caller"]
-    print(f"\n{totals['tried']} inputs in {time.perf_counter() - started:.0f} s: "
-          + ", ".join(f"{kind} {totals[kind]}" for kind in FAILING)
-          + f", unclear error {unclear} (and {totals['unclear, left to the caller']} where the reader leaves naming"
-          + f" the file to its caller); hangs are reads over {HANG_S:.0f} s")
+    print(
+        f"\n{totals['tried']} inputs in {time.perf_counter() - started:.0f} s: "
+        + ", ".join(f"{kind} {totals[kind]}" for kind in FAILING)
+        + f", unclear error {unclear} (and {totals['unclear, left to the caller']} where the reader leaves naming"
+        + f" the file to its caller); hangs are reads over {HANG_S:.0f} s"
+    )
     return 1 if failing else 0
 
 

@@ -198,8 +198,9 @@ def test_jpeg_round_trip_is_close_and_keeps_the_channel_order(tmp_path, bag_form
     assert (colour.encoding, mono.encoding) == ("rgb8", "mono8")
     for frame, original in ((colour, image), (mono, image[..., 1])):
         # what OpenCV's own codec gives at quality 95, pixel for pixel (its colour images are blue-green-red)
-        coded = cv2.imencode(".jpg", original[..., ::-1] if original.ndim == 3 else original,
-                             [cv2.IMWRITE_JPEG_QUALITY, 95])[1]
+        coded = cv2.imencode(
+            ".jpg", original[..., ::-1] if original.ndim == 3 else original, [cv2.IMWRITE_JPEG_QUALITY, 95]
+        )[1]
         decoded = cv2.imdecode(coded, cv2.IMREAD_UNCHANGED)
         np.testing.assert_array_equal(frame.image, decoded[..., ::-1] if decoded.ndim == 3 else decoded)
         error = np.abs(frame.image.astype(int) - original)
@@ -609,7 +610,9 @@ def test_an_os_error_of_reading_the_messages_names_the_bag(tmp_path, monkeypatch
         monkeypatch.setattr(bag.reader, "messages", seek_refused)
         frames = bag.frames("/camera", progress=False)
         assert next(frames).image[0, 0] == 0
-        with pytest.raises(ValueError, match=rf"^{re.escape(str(path))} is damaged or cannot be read: Invalid argument"):
+        with pytest.raises(
+            ValueError, match=rf"^{re.escape(str(path))} is damaged or cannot be read: Invalid argument"
+        ):
             next(frames)
 
 

@@ -113,8 +113,12 @@ def test_what_killed_writes_left_goes_the_next_time_the_cache_is_written(tmp_pat
     monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path))
     ended, host, old = _ended_process(), partial.HOST, time.time() - partial.STALE_S - 60
     left = {
-        "recordings": [f"bag-0123-partial-{host}-{ended}.bag", f"ros2-0123-partial-{host}-{ended}",
-                       f"bag-0123.bag.crc32-partial-{host}-{ended}", f"bag-4567-partial-{ended}.bag"],
+        "recordings": [
+            f"bag-0123-partial-{host}-{ended}.bag",
+            f"ros2-0123-partial-{host}-{ended}",
+            f"bag-0123.bag.crc32-partial-{host}-{ended}",
+            f"bag-4567-partial-{ended}.bag",
+        ],
         "tables": [f"table-0123-partial-elsewhere-{ended}.npz"],
     }
     kept = {"recordings": [f"bag-89ab-partial-{host}-{os.getpid()}.bag", f"bag-cdef-partial-elsewhere-{ended}.bag"]}
@@ -164,7 +168,9 @@ def test_a_full_cache_is_named_and_what_was_computed_is_still_used(tmp_path, mon
         table = analytic_table(rig.camera, rig.mount, floor)
     built = analytic_table(rig.camera, rig.mount, floor, cache=False)
     np.testing.assert_array_equal(table.map_x, built.map_x)
-    assert f"the cache folder {tmp_path} is full" in caplog.text and f"table-{table.key}.npz was not kept" in caplog.text
+    assert (
+        f"the cache folder {tmp_path} is full" in caplog.text and f"table-{table.key}.npz was not kept" in caplog.text
+    )
     assert list(cache.folder("tables").iterdir()) == []
     with pytest.raises(OSError, match=rf"the cache folder {tmp_path} is full .*bag-0123\.bag could not be kept"):
         cache.write(cache.path("recordings", "bag", "0123", ".bag"), lambda p: full(p))
@@ -177,7 +183,8 @@ def test_tables_and_downloads_live_under_the_one_variable(tmp_path, monkeypatch)
     rig = t265_rig()
     table = analytic_table(rig.camera, rig.mount, FloorImage.top_view(metres_per_pixel=4e-3))
     assert sorted(path.name for path in (tmp_path / "tables").iterdir()) == [
-        f"table-{table.key}.npz", f"table-{table.key}.npz.crc32"
+        f"table-{table.key}.npz",
+        f"table-{table.key}.npz.crc32",
     ]
     assert datasets.data_dir() == tmp_path / "datasets"
     monkeypatch.setenv("GPO_DATA_DIR", str(tmp_path / "copies"))  # the real-data folder stays a folder of its own
@@ -188,8 +195,15 @@ def test_the_oldest_files_that_can_be_made_again_go_when_the_cache_is_full(tmp_p
     monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(cache, "MAX_BYTES", 3500)
     made = {}
-    for age, (kind, name) in enumerate([("recordings", "old"), ("datasets", "download"), ("tables", "older-code"),
-                                        ("recordings", "bag2"), ("runs", "run")]):
+    for age, (kind, name) in enumerate(
+        [
+            ("recordings", "old"),
+            ("datasets", "download"),
+            ("tables", "older-code"),
+            ("recordings", "bag2"),
+            ("runs", "run"),
+        ]
+    ):
         path = cache.path(kind, name, "0123456789abcdef", ".bin")
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(b"x" * 1000)
@@ -215,8 +229,11 @@ def tiny_setup() -> Setup:
     """The test preset's first segment seen at 3 frames a second on a small floor: a recording of 6 frames."""
     setup = PRESETS["test"].setup()
     return dataclasses.replace(
-        setup, rig=dataclasses.replace(setup.rig, rate_hz=3.0), plan=MotionPlan(setup.plan.segments[:1]),
-        floor_margin_m=1.0, texel_m=2e-3,
+        setup,
+        rig=dataclasses.replace(setup.rig, rate_hz=3.0),
+        plan=MotionPlan(setup.plan.segments[:1]),
+        floor_margin_m=1.0,
+        texel_m=2e-3,
     )
 
 

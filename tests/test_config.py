@@ -65,8 +65,10 @@ def test_the_optical_quaternion_is_still_read_alone_or_beside_a_consistent_rpy(t
     rig = t265_rig()
     quaternion = rig.mount.rotation.as_quat().tolist()
     position = rig.mount.position.tolist()
-    for mount in ({"position_m": position, "quaternion_xyzw": quaternion},
-                  {"position_m": position, "quaternion_xyzw": quaternion, "rpy_deg": [1.5, 6.0, 0.0]}):
+    for mount in (
+        {"position_m": position, "quaternion_xyzw": quaternion},
+        {"position_m": position, "quaternion_xyzw": quaternion, "rpy_deg": [1.5, 6.0, 0.0]},
+    ):
         again = load_rig(write_mount(tmp_path, mount)).mount
         np.testing.assert_allclose(again.rotation.as_matrix(), rig.mount.rotation.as_matrix(), atol=1e-12)
 
@@ -79,8 +81,10 @@ def test_an_rpy_and_a_quaternion_that_disagree_are_shown_both_as_roll_pitch_yaw(
     with pytest.raises(ValueError, match=disagree) as error:
         load_rig(path)
     assert "rpy_deg is [1.500, 8.000, 0.000] and quaternion_xyzw is [1.500, 6.000, 0.000]" in str(error.value)
-    for bad, message in (({"rpy_deg": [1.0, 2.0]}, r"mount\.rpy_deg\.2: missing"),
-                         ({"quaternion_xyzw": [0, 0, 0, 0]}, "quaternion cannot be all zeros")):
+    for bad, message in (
+        ({"rpy_deg": [1.0, 2.0]}, r"mount\.rpy_deg\.2: missing"),
+        ({"quaternion_xyzw": [0, 0, 0, 0]}, "quaternion cannot be all zeros"),
+    ):
         with pytest.raises(ValueError, match=message):
             load_rig(write_mount(tmp_path, {"position_m": [0.6, 0.0, 0.12]} | bad))
 
@@ -124,8 +128,11 @@ def test_the_ranges_admit_what_the_presets_and_chapters_use():
         for exponent in (low, high):
             FusionSettings(**{field: 10.0**exponent})
     FusionSettings(tracking_position_walk_m_per_sqrt_s=5.0, tracking_yaw_walk_rad_per_sqrt_s=1.0)
-    with pytest.raises(ValueError, match=r"^tracking_position_walk_m_per_sqrt_s must be a number from 0 to 10 "
-                                         r"m/sqrt\(s\), got 10\.5$"):
+    with pytest.raises(
+        ValueError,
+        match=r"^tracking_position_walk_m_per_sqrt_s must be a number from 0 to 10 "
+        r"m/sqrt\(s\), got 10\.5$",
+    ):
         FusionSettings(tracking_position_walk_m_per_sqrt_s=10.5)
     with pytest.raises(ValueError, match=r"^accel_mps2 must be a number from 0 to 100 m/s\^2 per sqrt\(Hz\), got -0\."):
         FusionSettings(accel_mps2=-0.1)
@@ -136,12 +143,24 @@ def test_the_ranges_admit_what_the_presets_and_chapters_use():
     [
         ("rate_hz", 0.0, r"rate_hz must be a number over 0 to 1000 Hz, got 0\.0"),
         ("rate_hz", 1000.5, r"rate_hz must be a number over 0 to 1000 Hz, got 1000\.5"),
-        ("mount", {"position_m": [0.6, 0.0, 5.5], "rpy_deg": [0, 6, 0]}, r"mount\.position_m\.2 must be a number "
-                                                                         r"over 0 to 5 m above the floor, got 5\.5"),
-        ("mount", {"position_m": [-50.5, 0.0, 0.1], "rpy_deg": [0, 6, 0]}, r"mount\.position_m\.0 must be a number "
-                                                                           r"from -50 to 50 m, got -50\.5"),
-        ("mount", {"position_m": [0.6, 0.0, 0.1], "rpy_deg": [0, 361, 0]}, r"mount\.rpy_deg\.1 must be a number from "
-                                                                           r"-360 to 360 deg, got 361"),
+        (
+            "mount",
+            {"position_m": [0.6, 0.0, 5.5], "rpy_deg": [0, 6, 0]},
+            r"mount\.position_m\.2 must be a number "
+            r"over 0 to 5 m above the floor, got 5\.5",
+        ),
+        (
+            "mount",
+            {"position_m": [-50.5, 0.0, 0.1], "rpy_deg": [0, 6, 0]},
+            r"mount\.position_m\.0 must be a number "
+            r"from -50 to 50 m, got -50\.5",
+        ),
+        (
+            "mount",
+            {"position_m": [0.6, 0.0, 0.1], "rpy_deg": [0, 361, 0]},
+            r"mount\.rpy_deg\.1 must be a number from "
+            r"-360 to 360 deg, got 361",
+        ),
     ],
 )
 def test_a_value_just_beyond_its_range_is_refused_with_key_value_range_and_unit(tmp_path, key, value, message):
@@ -210,8 +229,10 @@ def test_a_number_written_as_text_is_refused(tmp_path):
 
 @pytest.mark.parametrize(
     ("resolution", "message"),
-    [([848, 8.0e32], r"resolution\.1 must be a whole number from 1 to 20000 px, got 8e\+32"),
-     ([True, 800], r"resolution\.0 must be a whole number from 1 to 20000 px, got True")],
+    [
+        ([848, 8.0e32], r"resolution\.1 must be a whole number from 1 to 20000 px, got 8e\+32"),
+        ([True, 800], r"resolution\.0 must be a whole number from 1 to 20000 px, got True"),
+    ],
 )
 def test_a_camchain_a_config_names_is_held_to_the_ranges_of_a_camera_written_inline(tmp_path, resolution, message):
     rig = t265_rig()

@@ -22,8 +22,19 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 EXAMPLES = {
-    "ros1": 30, "ros2-sqlite3": 30, "ros2-mcap": 30, "config": 60, "kalibr": 60, "basalt": 60, "boofcv": 60,
-    "camera_info": 60, "sweep spec": 60, "tum": 60, "tum (evaluate)": 60, "gpo info": 20, "gpo evaluate": 20,
+    "ros1": 30,
+    "ros2-sqlite3": 30,
+    "ros2-mcap": 30,
+    "config": 60,
+    "kalibr": 60,
+    "basalt": 60,
+    "boofcv": 60,
+    "camera_info": 60,
+    "sweep spec": 60,
+    "tum": 60,
+    "tum (evaluate)": 60,
+    "gpo info": 20,
+    "gpo evaluate": 20,
 }
 """Inputs per reader in CI, so that the whole file takes well under 60 s: measured 22 s of processor time (43 s in
 pytest, 56 s with its start, at a load of 8.5 on this machine's two cores)."""
@@ -54,9 +65,7 @@ def test_a_reader_gives_a_clear_error_or_a_correct_result(name):
     read()
 
 
-@pytest.mark.parametrize(
-    ("command", "mutants"), [("info", bag_mutants("ros1")), ("evaluate", tum_mutants())]
-)
+@pytest.mark.parametrize(("command", "mutants"), [("info", bag_mutants("ros1")), ("evaluate", tum_mutants())])
 def test_a_command_as_a_process_exits_cleanly(command, mutants):
     """The command run as users run it, its own process ended after HANG_S seconds."""
     target = Target(f"python -m gpo {command}", mutants, lambda path: run_process(command, path), names_file=False)
@@ -78,8 +87,8 @@ def _raising_check(error: Exception):
 
 
 @pytest.mark.parametrize(
-    ("error", "kind"), [(ValueError("the saved config does not load again"), "wrong result"),
-                        (KeyError("no such part"), "traceback")]
+    ("error", "kind"),
+    [(ValueError("the saved config does not load again"), "wrong result"), (KeyError("no such part"), "traceback")],
 )
 def test_a_check_that_fails_otherwise_than_by_assertion_is_a_finding(error, kind):
     """What goes wrong inside the harness (the config target's round trip raising ValueError) is reported as a
@@ -94,9 +103,25 @@ def test_a_check_that_fails_otherwise_than_by_assertion_is_a_finding(error, kind
 def test_the_campaign_takes_several_seeds_and_prints_each_targets_inputs_and_findings(tmp_path):
     campaign = Path(__file__).parents[1] / "benchmarks" / "fuzz_campaign.py"
     done = subprocess.run(
-        [sys.executable, str(campaign), "--examples", "4", "--seed", "7", "8", "--target", "tum", "--target",
-         "camera_info", "--out", str(tmp_path)],
-        capture_output=True, text=True, timeout=300, env={**os.environ, "PYTHONPATH": str(campaign.parents[1])},
+        [
+            sys.executable,
+            str(campaign),
+            "--examples",
+            "4",
+            "--seed",
+            "7",
+            "8",
+            "--target",
+            "tum",
+            "--target",
+            "camera_info",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "PYTHONPATH": str(campaign.parents[1])},
     )
     assert done.returncode == 0, done.stdout + done.stderr
     lines = done.stdout.splitlines()

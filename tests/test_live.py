@@ -94,8 +94,12 @@ def test_the_streaming_filter_refuses_floor_poses_back_in_time_and_counts_bad_tr
     fusion.add_tracking(0.9, (0.0, 0.0, 0.0))
     fusion.add_tracking(1.0, (0.0, 0.0, 0.0))
     fusion.add_tracking(1.1, (np.nan, 0.0, 0.0))
-    assert fusion.dropped == {"tracking: stamp out of order (dropped)": 1, "tracking: stamp repeated": 1,
-                              "tracking: pose not finite": 1, "floor: pose not finite": 1}
+    assert fusion.dropped == {
+        "tracking: stamp out of order (dropped)": 1,
+        "tracking: stamp repeated": 1,
+        "tracking: pose not finite": 1,
+        "floor: pose not finite": 1,
+    }
 
 
 def test_fuse_is_the_streaming_filter_fed_a_recording(bag):
@@ -108,8 +112,9 @@ def test_fuse_is_the_streaming_filter_fed_a_recording(bag):
         tracking = tracking_path(recorded, config.fusion)
     fused = fuse(floor.trajectory, floor.inliers, tracking, config.fusion, floor.spread_px)
     streaming = StreamingFusion(config.fusion)
-    for stamp_ns, pose in zip(tracking.stamps_ns, np.column_stack([tracking.positions[:, :2], tracking.yaw]),
-                              strict=True):
+    for stamp_ns, pose in zip(
+        tracking.stamps_ns, np.column_stack([tracking.positions[:, :2], tracking.yaw]), strict=True
+    ):
         streaming.add_tracking(stamp_ns * 1e-9, pose)
     settled = []
     for k, stamp_ns in enumerate(floor.trajectory.stamps_ns):
@@ -142,8 +147,9 @@ def test_two_threads_give_the_one_threads_records(bag, method):
     one = run(bag, config, progress=False, threads=1).records
     two = run(bag, config, progress=False, threads=2).records
     assert len(one) > 50
-    assert [(r.stamp_ns, r.pose, r.status, r.flag, r.inliers) for r in two] == \
-        [(r.stamp_ns, r.pose, r.status, r.flag, r.inliers) for r in one]
+    assert [(r.stamp_ns, r.pose, r.status, r.flag, r.inliers) for r in two] == [
+        (r.stamp_ns, r.pose, r.status, r.flag, r.inliers) for r in one
+    ]
 
 
 def test_read_ahead_keeps_the_order_raises_in_place_and_stops_its_thread():
@@ -178,8 +184,11 @@ def _stream(config, mount, frames, tracking, refused=()) -> tuple[list, list]:
     after the eleventh message; the floor records, and the x, y, theta of every fused pose settled."""
     fused = []
     odometer = LiveOdometer(config, mount, on_fused=fused.append)
-    messages = sorted([(stamp, 1, ("step", stamp, image)) for stamp, image in frames]
-                      + [(stamp, 0, ("track", stamp, p, q)) for stamp, p, q in tracking], key=lambda m: m[:2])
+    messages = sorted(
+        [(stamp, 1, ("step", stamp, image)) for stamp, image in frames]
+        + [(stamp, 0, ("track", stamp, p, q)) for stamp, p, q in tracking],
+        key=lambda m: m[:2],
+    )
     records = []
     for number, (_, _, (kind, *arguments)) in enumerate(messages):
         if kind == "step":

@@ -50,8 +50,10 @@ def _new_set(folder: Path, failing: BaseException | None = None) -> dict[Path, o
             raise failing
         temporary.write_text("new summary\n")
 
-    return {folder / "t.tum": lambda temporary: temporary.write_text("new trajectory\n"),
-            folder / "t.summary.yaml": second}
+    return {
+        folder / "t.tum": lambda temporary: temporary.write_text("new trajectory\n"),
+        folder / "t.summary.yaml": second,
+    }
 
 
 def _contents(folder: Path) -> dict[str, str]:
@@ -67,8 +69,10 @@ def test_a_set_of_files_replaces_the_old_set_as_one(tmp_path):
 
 @pytest.mark.parametrize(
     ("failing", "raised", "words"),
-    [(OSError(errno.ENOSPC, "No space left on device"), OSError, "t.summary.yaml: the disk is full"),
-     (KeyboardInterrupt(), KeyboardInterrupt, None)],
+    [
+        (OSError(errno.ENOSPC, "No space left on device"), OSError, "t.summary.yaml: the disk is full"),
+        (KeyboardInterrupt(), KeyboardInterrupt, None),
+    ],
 )
 def test_a_set_that_fails_before_its_renames_leaves_the_old_set_whole(tmp_path, failing, raised, words):
     before = {path.name: text for path, text in _old_set(tmp_path).items()}
@@ -105,9 +109,11 @@ outputs.write_together({folder / "t.tum": written("new trajectory\\n", "t.tum*")
 
 @pytest.mark.parametrize(
     ("stop", "after"),
-    [("t.summary.yaml*", "old"),  # killed while the second file is written: the old set stays
-     ("t.tum", "new"),  # killed after the journal, before the first rename: the set is finished
-     ("t.summary.yaml", "new")],  # killed between the two renames: the set is finished
+    [
+        ("t.summary.yaml*", "old"),  # killed while the second file is written: the old set stays
+        ("t.tum", "new"),  # killed after the journal, before the first rename: the set is finished
+        ("t.summary.yaml", "new"),
+    ],  # killed between the two renames: the set is finished
 )
 def test_a_set_whose_writer_was_killed_is_whole_the_next_time_its_folder_is_used(tmp_path, stop, after):
     _old_set(tmp_path)
@@ -148,11 +154,18 @@ def test_a_rename_that_fails_puts_the_old_set_back_and_the_new_one_beside_it(tmp
         rename(source, target)
 
     monkeypatch.setattr(os, "replace", replace)
-    with pytest.raises(OSError, match=r"t\.tum, .*t\.summary\.yaml could not be replaced.*kept as they were.*"
-                                      r"beside them: .*t\.new\.tum, .*t\.new\.summary\.yaml"):
+    with pytest.raises(
+        OSError,
+        match=r"t\.tum, .*t\.summary\.yaml could not be replaced.*kept as they were.*"
+        r"beside them: .*t\.new\.tum, .*t\.new\.summary\.yaml",
+    ):
         write_together(_new_set(tmp_path))
-    assert _contents(tmp_path) == {"t.new.summary.yaml": "new summary\n", "t.new.tum": "new trajectory\n",
-                                   "t.summary.yaml": "old summary\n", "t.tum": "old trajectory\n"}
+    assert _contents(tmp_path) == {
+        "t.new.summary.yaml": "new summary\n",
+        "t.new.tum": "new trajectory\n",
+        "t.summary.yaml": "old summary\n",
+        "t.tum": "old trajectory\n",
+    }
 
 
 def test_ctrl_c_during_the_renames_waits_for_the_whole_set(tmp_path, monkeypatch):

@@ -52,8 +52,23 @@ from gpo.cli import (
 )
 from gpo.cli.common import EXIT_CODES, INTERRUPTED, Interruption
 
-COMMANDS = (demo, simulate, info, sample_data, recording, calibrate, mount, config, run, table3, table4, table2,
-            evaluate, sweep, sweep_report)
+COMMANDS = (
+    demo,
+    simulate,
+    info,
+    sample_data,
+    recording,
+    calibrate,
+    mount,
+    config,
+    run,
+    table3,
+    table4,
+    table2,
+    evaluate,
+    sweep,
+    sweep_report,
+)
 """Every command's module, in the order ``--help`` lists them."""
 
 

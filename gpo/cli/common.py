@@ -41,8 +41,11 @@ class Interruption:
         if self.count == 1:
             raise KeyboardInterrupt
         if self.count == 2:
-            print("interrupted again: what was computed is being written first (kill -9 stops at once, and leaves the "
-                  "files already there whole)", file=sys.stderr)
+            print(
+                "interrupted again: what was computed is being written first (kill -9 stops at once, and leaves the "
+                "files already there whole)",
+                file=sys.stderr,
+            )
 
 
 def figure_writer(fig: Figure, dpi: int) -> Callable[[Path], object]:

@@ -1,5 +1,4 @@
-"""``python -m gpo demo``: the suite's figures, tables and the sample recording's odometry, written to a folder.
-"""
+"""``python -m gpo demo``: the suite's figures, tables and the sample recording's odometry, written to a folder."""
 
 from __future__ import annotations
 

@@ -1,5 +1,4 @@
-"""``python -m gpo evaluate``: a TUM trajectory's errors against the ground truth (a TUM file or a bag's topic).
-"""
+"""``python -m gpo evaluate``: a TUM trajectory's errors against the ground truth (a TUM file or a bag's topic)."""
 
 from __future__ import annotations
 
@@ -89,7 +88,10 @@ def read_tum(path: Path) -> Trajectory:
     if repeated.size:
         keep = np.delete(np.arange(len(stamps)), repeated)
         trajectory = Trajectory(
-            stamps[keep], trajectory.positions[keep], trajectory.quaternions[keep], trajectory.frame_id,
+            stamps[keep],
+            trajectory.positions[keep],
+            trajectory.quaternions[keep],
+            trajectory.frame_id,
             trajectory.child_frame_id,
         )
     return trajectory

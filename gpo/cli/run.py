@@ -1,5 +1,4 @@
-"""``python -m gpo run``: the odometry of a recording, its TUM trajectory and summary (and a copy of the bag).
-"""
+"""``python -m gpo run``: the odometry of a recording, its TUM trajectory and summary (and a copy of the bag)."""
 
 from __future__ import annotations
 
@@ -29,7 +28,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--write-bag", type=Path, help="a copy of the bag with the estimate on /gpo/odom")
     parser.add_argument("--force", action="store_true", help="a flagged result replaces --out too")
     parser.add_argument(
-        "--threads", type=whole_number, default=min(2, available_cores()),
+        "--threads",
+        type=whole_number,
+        default=min(2, available_cores()),
         help="threads: from 2 on, the next frames are read and prepared while one is tracked, and OpenCV shares its "
         "work among them (default 2, or 1 on a one-core machine)",
     )

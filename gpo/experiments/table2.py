@@ -226,7 +226,8 @@ def _run_together(bag: Path, chosen: Experiment, configs: dict[str, OdometryConf
     return {
         name: ExperimentRun(
             OdometryResult(records[name], detecting + seconds[name], configs[name], bag.name, "").trajectory,
-            len(records[name]), len(records[name]) / (detecting + seconds[name]),
+            len(records[name]),
+            len(records[name]) / (detecting + seconds[name]),
             truth,
         )
         for name in configs

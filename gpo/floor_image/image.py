@@ -151,7 +151,6 @@ class FloorImage:
         return {"width": self.width, "height": self.height, "affine": self.affine.tolist(), "metric": self.metric}
 
 
-
 @dataclass(frozen=True, eq=False)
 class RemapTable:
     """One ``cv2.remap`` from a fisheye image to a floor image.
@@ -169,9 +168,7 @@ class RemapTable:
     key: str
 
     @classmethod
-    def from_points(
-        cls, fisheye_uv: np.ndarray, valid: np.ndarray, floor: FloorImage, camera: CameraModel, key: str
-    ):
+    def from_points(cls, fisheye_uv: np.ndarray, valid: np.ndarray, floor: FloorImage, camera: CameraModel, key: str):
         """The table of fisheye pixels ``fisheye_uv`` (height, width, 2), valid where ``valid`` (height, width)."""
         uv = np.where(valid[..., None], fisheye_uv, np.nan).astype(np.float32)
         return cls(uv[..., 0].copy(), uv[..., 1].copy(), valid.copy(), floor, (camera.width, camera.height), key)

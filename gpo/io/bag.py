@@ -76,8 +76,21 @@ _TO_GRAY = {
 _FROM_BGR = {("bgr8", "rgb8"): cv2.COLOR_BGR2RGB, ("bgra8", "rgba8"): cv2.COLOR_BGRA2RGBA}
 
 _DAMAGED = (
-    AnyReaderError, rosbag1.ReaderError, rosbag2.ReaderError, ValueError, KeyError, IndexError, TypeError,
-    AttributeError, AssertionError, OverflowError, EOFError, MemoryError, RecursionError, struct.error, sqlite3.Error,
+    AnyReaderError,
+    rosbag1.ReaderError,
+    rosbag2.ReaderError,
+    ValueError,
+    KeyError,
+    IndexError,
+    TypeError,
+    AttributeError,
+    AssertionError,
+    OverflowError,
+    EOFError,
+    MemoryError,
+    RecursionError,
+    struct.error,
+    sqlite3.Error,
     apsw.Error,
 )
 """What rosbags raises reading the bytes of a damaged bag (cut short, bits flipped, records out of order, a topic
@@ -145,8 +158,10 @@ class Recording:
         for connection in self.reader.connections:
             fields = (connection.topic, connection.msgtype, connection.msgcount)
             if not (isinstance(fields[0], str) and isinstance(fields[1], str) and isinstance(fields[2], int)):
-                problem = (f"a topic {fields[0]!r:.60} of type {fields[1]!r:.60} with {fields[2]!r:.20} messages; "
-                           "expected names and a count")
+                problem = (
+                    f"a topic {fields[0]!r:.60} of type {fields[1]!r:.60} with {fields[2]!r:.20} messages; "
+                    "expected names and a count"
+                )
         times = (self.reader.start_time, self.reader.end_time)
         if not all(isinstance(time, int) and -(2**63) <= time < 2**63 for time in times):
             problem = f"its first and last times are {times[0]!r:.30} and {times[1]!r:.30}; expected nanoseconds"
@@ -425,7 +440,6 @@ def describe(path) -> str:
     return "\n".join(header + table) + "\n"
 
 
-
 def recording_format(path) -> str:
     """The format of the recording at ``path`` (``ros1``, ``ros2-sqlite3`` or ``ros2-mcap``), without reading it;
     an error naming ``path`` when it is not a recording."""
@@ -462,8 +476,6 @@ def _repair_hint(path: Path) -> str:
 
 def _stamp_ns(header) -> int:
     return header.stamp.sec * NS_PER_S + header.stamp.nanosec
-
-
 
 
 def _order_problem(previous: int | None, stamp: int) -> str | None:
@@ -529,7 +541,8 @@ def _trajectory(poses: list, context: str) -> Trajectory:
         warnings.warn(
             f"{context}: {repeated.size} poses repeat an earlier header stamp, first at message "
             f"{order[repeated[0]]} ({stamps[order[repeated[0]]]} ns); of each stamp the first pose is kept",
-            StampWarning, stacklevel=3,
+            StampWarning,
+            stacklevel=3,
         )
     keep = np.delete(order, repeated)
     frame_id, child_frame_id = frame_pairs[0]
@@ -547,7 +560,6 @@ def _camera_from_info(message, context: str) -> Camera:
     k = getattr(message, "k", None)
     k, d = (message.K, message.D) if k is None else (k, message.d)
     return camera_from_camera_info(message.distortion_model, d, k, message.width, message.height, context)
-
 
 
 def _decode(message, context: str) -> tuple[np.ndarray, str]:

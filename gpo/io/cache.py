@@ -149,8 +149,10 @@ def keep(target: Path, save: Callable[[Path], object]) -> bool:
 
 def _full(target: Path, what: str) -> OSError:
     """The error of a cache file ``target`` the full disk stopped: the cache folder, the file, ``what`` became of it."""
-    error = OSError(f"the cache folder {root()} is full (no space left on the device): {target.name} {what}; free "
-                    f"some room, or set {ENVIRONMENT_VARIABLE} to a folder with room")
+    error = OSError(
+        f"the cache folder {root()} is full (no space left on the device): {target.name} {what}; free "
+        f"some room, or set {ENVIRONMENT_VARIABLE} to a folder with room"
+    )
     error.errno = errno.ENOSPC
     return error
 

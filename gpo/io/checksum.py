@@ -113,8 +113,11 @@ def _signature(path: Path) -> tuple:
     """(name, size, (inode, modification time)) of the file, or of every file of the folder: what a change to any
     of them changes."""
     return tuple(
-        (str(file.relative_to(path)) if path.is_dir() else path.name, status.st_size,
-         (status.st_ino, status.st_mtime_ns))
+        (
+            str(file.relative_to(path)) if path.is_dir() else path.name,
+            status.st_size,
+            (status.st_ino, status.st_mtime_ns),
+        )
         for file in _files(path)
         for status in (file.stat(),)
     )

@@ -129,8 +129,11 @@ def _full(path: Path, targets: list[Path]) -> OSError:
     if len(targets) == 1:
         kept = "the file already there is kept as it was" if path.exists() else "nothing is left half written"
     else:
-        kept = "the files already there are kept as they were" if any(t.exists() for t in targets) else (
-            "nothing is left half written")
+        kept = (
+            "the files already there are kept as they were"
+            if any(t.exists() for t in targets)
+            else ("nothing is left half written")
+        )
     error = OSError(f"{path}: the disk is full (no space left on the device); {kept}: free some room, then run again")
     error.errno = errno.ENOSPC
     return error
@@ -213,8 +216,10 @@ def _put_back(staged: dict[Path, Path], done: list[tuple[Path, Path | None]], er
             os.replace(new, beside_path(target))
     paths = ", ".join(map(str, staged))
     besides = ", ".join(str(beside_path(target)) for target in staged)
-    failure = OSError(f"{paths} could not be replaced ({error.strerror or error}): the files already there are kept "
-                      f"as they were, and this result is written beside them: {besides}")
+    failure = OSError(
+        f"{paths} could not be replaced ({error.strerror or error}): the files already there are kept "
+        f"as they were, and this result is written beside them: {besides}"
+    )
     failure.errno = error.errno
     return failure
 
@@ -273,8 +278,10 @@ def _journal(path: Path) -> list[tuple[Path, Path]]:
         pairs = [(Path(new), Path(target)) for new, target in json.loads(path.read_text())]
     except (OSError, ValueError, TypeError):
         return []
-    sound = all(STAGING.match(new.parent.name) and new.parent.parent == target.parent and new.name == target.name
-                for new, target in pairs)
+    sound = all(
+        STAGING.match(new.parent.name) and new.parent.parent == target.parent and new.name == target.name
+        for new, target in pairs
+    )
     return pairs if sound else []
 
 

@@ -38,8 +38,11 @@ def abandoned(host: str | None, pid: int, path: Path, now: float | None = None) 
     if host == HOST:
         return not _running(pid)
     try:
-        changed = max([path.stat().st_mtime, *(p.stat().st_mtime for p in path.rglob("*"))] if path.is_dir()
-                      else [path.stat().st_mtime])
+        changed = max(
+            [path.stat().st_mtime, *(p.stat().st_mtime for p in path.rglob("*"))]
+            if path.is_dir()
+            else [path.stat().st_mtime]
+        )
     except OSError:  # removed meanwhile
         return False
     return (time.time() if now is None else now) - changed > STALE_S

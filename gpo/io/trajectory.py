@@ -145,8 +145,10 @@ class Trajectory:
         try:
             text = path.read_text(encoding="utf-8")
         except UnicodeDecodeError:
-            raise ValueError(f"{path} is {_what_it_is(path)}, not a TUM text file: expected one pose a line, "
-                             "t tx ty tz qx qy qz qw, as gpo run --out writes") from None
+            raise ValueError(
+                f"{path} is {_what_it_is(path)}, not a TUM text file: expected one pose a line, "
+                "t tx ty tz qx qy qz qw, as gpo run --out writes"
+            ) from None
         stamps, values = [], []
         for number, line in enumerate(text.splitlines(), start=1):
             line = line.strip()

@@ -57,8 +57,9 @@ class LiveOdometer:
         on_fused: Callable[[FusedPose], object] | None = None,
     ):
         if not isinstance(config, OdometryConfig):
-            raise RefusedMessage(f"config: expected an OdometryConfig (gpo.pipeline.config.load_config), got "
-                                 f"{type(config).__name__}")
+            raise RefusedMessage(
+                f"config: expected an OdometryConfig (gpo.pipeline.config.load_config), got {type(config).__name__}"
+            )
         if on_fused is not None and not callable(on_fused):
             raise RefusedMessage(f"on_fused: expected a callable or None, got {type(on_fused).__name__}")
         fused = config.method == FUSED
@@ -91,8 +92,9 @@ class LiveOdometer:
         record = self.floor.step(stamp_ns, image)
         self._last_ns = max(stamp_ns, self._last_ns or stamp_ns)
         if self.fusion is not None and record.status is not Status.SKIPPED:
-            self._keep(self.fusion.add_floor(stamp_ns * 1e-9, record.pose, record.fused_inliers,
-                                             record.fused_spread_px))
+            self._keep(
+                self.fusion.add_floor(stamp_ns * 1e-9, record.pose, record.fused_inliers, record.fused_spread_px)
+            )
         return record
 
     def track(self, stamp_ns: int, position, orientation) -> None:
@@ -111,7 +113,8 @@ class LiveOdometer:
         pose = np.full(3, np.nan)  # not finite: the filter drops and counts it
         if finite:
             base = base_from_sensor_odometry(
-                Trajectory(np.array([stamp_ns]), position[None], orientation[None]), self._mount,
+                Trajectory(np.array([stamp_ns]), position[None], orientation[None]),
+                self._mount,
                 (Rotation.identity(), np.zeros(3)),
             )
             pose = np.array([*base.positions[0, :2], base.yaw[0]])
@@ -151,8 +154,10 @@ def _numbers(name: str, value, count: int, meaning: str) -> np.ndarray:
     """``value`` as ``count`` floats (a sequence of real numbers, no flags, no text); else a RefusedMessage naming
     ``name`` and its ``meaning``."""
     items = list(value) if isinstance(value, list | tuple | np.ndarray) and np.ndim(value) == 1 else None
-    if items is None or len(items) != count or not all(
-        isinstance(item, numbers.Real) and not isinstance(item, bool | np.bool_) for item in items
+    if (
+        items is None
+        or len(items) != count
+        or not all(isinstance(item, numbers.Real) and not isinstance(item, bool | np.bool_) for item in items)
     ):
         raise RefusedMessage(f"{name}: expected {count} numbers, {meaning}, got {value!r}")
     return np.array(items, dtype=float)
@@ -160,10 +165,10 @@ def _numbers(name: str, value, count: int, meaning: str) -> np.ndarray:
 
 def _mount(mount) -> tuple[Rotation, np.ndarray]:
     """A tracking camera's mount checked: (a scipy Rotation, 3 finite numbers in metres); else a RefusedMessage."""
-    if not (isinstance(mount, tuple | list) and len(mount) == 2 and isinstance(mount[0], Rotation)
-            and mount[0].single):
-        raise RefusedMessage(f"tracking_mount: expected (rotation, translation): a scipy Rotation and 3 numbers in "
-                             f"metres, got {mount!r}")
+    if not (isinstance(mount, tuple | list) and len(mount) == 2 and isinstance(mount[0], Rotation) and mount[0].single):
+        raise RefusedMessage(
+            f"tracking_mount: expected (rotation, translation): a scipy Rotation and 3 numbers in metres, got {mount!r}"
+        )
     translation = _numbers("tracking_mount", mount[1], 3, "the translation x, y, z in metres")
     if not np.isfinite(translation).all():
         raise RefusedMessage(f"tracking_mount: expected a finite translation, got {translation}")

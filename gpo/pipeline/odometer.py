@@ -1,5 +1,4 @@
-"""Frame by frame: a camera frame in, the robot's pose out (``FloorOdometer.step``), each frame's record beside it.
-"""
+"""Frame by frame: a camera frame in, the robot's pose out (``FloorOdometer.step``), each frame's record beside it."""
 
 from __future__ import annotations
 
@@ -189,8 +188,10 @@ class FloorOdometer:
             counts = {len(prepared.points), len(prepared.descriptors), len(prepared.sizes)}
             if len(counts) == 1 and prepared.points.shape[1:] == (2,):
                 return None
-            return (f"expected Keypoints of as many points (N, 2) as descriptors and sizes, got points of shape "
-                    f"{prepared.points.shape}, {len(prepared.descriptors)} descriptors, {len(prepared.sizes)} sizes")
+            return (
+                f"expected Keypoints of as many points (N, 2) as descriptors and sizes, got points of shape "
+                f"{prepared.points.shape}, {len(prepared.descriptors)} descriptors, {len(prepared.sizes)} sizes"
+            )
         shape = self.table.valid.shape
         wide = None if self._overview_table is None else self._overview_table.valid.shape
         if prepared.image.dtype != np.uint8 or prepared.image.shape != shape:

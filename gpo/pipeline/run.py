@@ -111,16 +111,20 @@ class OdometryResult:
             found.append(f"{missed} of {steps} steps not measured{why}")
         overview = sum(r.overview for r in measured)
         if overview >= CAUTION_SHARE * steps:
-            found.append(f"{overview} of {steps} steps measured on the whole view, the tracks disagreeing with it "
-                         "(a glossy floor's reflections?)")
+            found.append(
+                f"{overview} of {steps} steps measured on the whole view, the tracks disagreeing with it "
+                "(a glossy floor's reflections?)"
+            )
         slower = sum(slower_layer(r.slower, r.kept) for r in measured)
         if slower >= CAUTION_SHARE * steps:
             layer = "a second, slower layer of motion (a glossy floor's reflections)"
             found.append(f"{slower} of {steps} steps held {layer}")
         refused = (self.fusion or {}).get("refused_by_nis_gate", 0)
         if refused >= CAUTION_SHARE * steps:
-            found.append(f"the filter refused {refused} increments in {steps} steps: the floor and the tracking camera "
-                         "disagree beyond their noise")
+            found.append(
+                f"the filter refused {refused} increments in {steps} steps: the floor and the tracking camera "
+                "disagree beyond their noise"
+            )
         return found
 
     @property
@@ -183,8 +187,10 @@ class OdometryResult:
         """The run's files by path, each with what writes it at a temporary path (``gpo.io.outputs.write_together``):
         the trajectory as TUM at ``tum_path`` and the summary as YAML beside it (``summary_path_of``)."""
         summary = yaml.safe_dump(self.summary(), sort_keys=False)
-        return {Path(tum_path): self.trajectory.write_tum,
-                summary_path_of(tum_path): lambda temporary: temporary.write_text(summary)}
+        return {
+            Path(tum_path): self.trajectory.write_tum,
+            summary_path_of(tum_path): lambda temporary: temporary.write_text(summary),
+        }
 
     def write(self, tum_path) -> tuple[Path, Path]:
         """Write the trajectory and its summary (``files``) as one set: both replace the files there, or neither
@@ -204,7 +210,10 @@ def _reason(flag: str) -> str:
 
 
 def run(
-    bag, config: OdometryConfig | None = None, topic: str | None = None, progress: bool = True,
+    bag,
+    config: OdometryConfig | None = None,
+    topic: str | None = None,
+    progress: bool = True,
     threads: int | None = None,
 ) -> OdometryResult:
     """Odometry of the camera frames of ``bag`` (``topic``: default the rig's image topic when the bag has it,
@@ -231,8 +240,10 @@ def run(
         except ValueError as error:
             raise ValueError(f"{bag}, topic {topic}: {error}") from None
         if config.method == FUSED and result.interrupted:
-            result.fusion = {"not_fused": f"interrupted before the fusion: the trajectory is the floor odometry of "
-                                          f"{config.fusion.floor_method} alone, without the tracking camera"}
+            result.fusion = {
+                "not_fused": f"interrupted before the fusion: the trajectory is the floor odometry of "
+                f"{config.fusion.floor_method} alone, without the tracking camera"
+            }
         elif config.method == FUSED:
             _fuse_into(result, tracking, config.fusion, note)
             result.seconds = time.perf_counter() - started

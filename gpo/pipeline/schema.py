@@ -230,11 +230,19 @@ def checked(model: type[BaseModel], document, where: str, within: tuple = ()):
 
 
 EXPECTED = {
-    "float_type": "expected a number", "float_parsing": "expected a number", "int_type": "expected a whole number",
-    "int_parsing": "expected a whole number", "int_from_float": "expected a whole number",
-    "bool_type": "expected true or false", "bool_parsing": "expected true or false", "string_type": "expected text",
-    "model_type": "expected a mapping of its keys", "dataclass_type": "expected a mapping of its keys",
-    "dict_type": "expected a mapping of its keys", "tuple_type": "expected a list", "list_type": "expected a list",
+    "float_type": "expected a number",
+    "float_parsing": "expected a number",
+    "int_type": "expected a whole number",
+    "int_parsing": "expected a whole number",
+    "int_from_float": "expected a whole number",
+    "bool_type": "expected true or false",
+    "bool_parsing": "expected true or false",
+    "string_type": "expected text",
+    "model_type": "expected a mapping of its keys",
+    "dataclass_type": "expected a mapping of its keys",
+    "dict_type": "expected a mapping of its keys",
+    "tuple_type": "expected a list",
+    "list_type": "expected a list",
     "finite_number": "expected a finite number",
 }
 """What a key of the wrong type expected, by pydantic's error type."""
@@ -383,6 +391,7 @@ def _mount(section: MountSection, where) -> CameraMount:
                 f"the body frame, rpy_deg is {as_rpy[0]} and quaternion_xyzw is {as_rpy[1]}; give one of them"
             )
     return mounts.get("rpy_deg", mounts.get("quaternion_xyzw"))
+
 
 def load_camera(path) -> Camera:
     """The camera of a calibration file: a Basalt JSON (its first camera), a Kalibr camchain (its first camera) or a

@@ -115,8 +115,14 @@ def memory_limit(extra: int) -> Iterator[None]:
     """Limit the process's address space to what it maps now and ``extra`` bytes more (Linux), within the block."""
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
     status = Path("/proc/self/status")
-    mapped = next((int(line.split()[1]) * 1024 for line in status.read_text().splitlines()
-                   if line.startswith("VmSize:")), None) if status.exists() else None
+    mapped = (
+        next(
+            (int(line.split()[1]) * 1024 for line in status.read_text().splitlines() if line.startswith("VmSize:")),
+            None,
+        )
+        if status.exists()
+        else None
+    )
     if mapped is None:
         yield
         return
@@ -231,7 +237,7 @@ def byte_mutation(draw, content: bytes, hot: tuple[int, ...] = ()) -> tuple[byte
     if kind == "number":  # a float64 or a count of records no file holds
         value = draw(st.sampled_from((math.nan, math.inf, -math.inf, 1e308, -0.0, 5e-324, 2**31 - 1, 2**32 - 1)))
         packed = struct.pack("<d", value) if isinstance(value, float) else struct.pack("<I", value)
-        return content[:start] + packed + content[start + len(packed):], f"{value!r} written at {start}"
+        return content[:start] + packed + content[start + len(packed) :], f"{value!r} written at {start}"
     if kind == "flip":
         flips = [(offset(), draw(st.integers(0, 7))) for _ in range(draw(st.integers(1, 8)))]
         changed = bytearray(content)
@@ -242,12 +248,13 @@ def byte_mutation(draw, content: bytes, hot: tuple[int, ...] = ()) -> tuple[byte
     length = draw(st.integers(1, 256))
     if kind == "overwrite":
         noise = draw(st.binary(min_size=1, max_size=length))
-        return content[:start] + noise + content[start + len(noise):], f"{len(noise)} bytes overwritten at {start}"
+        return content[:start] + noise + content[start + len(noise) :], f"{len(noise)} bytes overwritten at {start}"
     if kind == "cut":
-        return content[:start] + content[start + length:], f"{length} bytes cut at {start}"
+        return content[:start] + content[start + length :], f"{length} bytes cut at {start}"
     if kind == "double":
-        return content[:start] + content[start:start + length] * 2 + content[start + length:], (
-            f"{length} bytes doubled at {start}")
+        return content[:start] + content[start : start + length] * 2 + content[start + length :], (
+            f"{length} bytes doubled at {start}"
+        )
     noise = draw(st.binary(min_size=1, max_size=length))
     return content[:start] + noise + content[start:], f"{len(noise)} bytes inserted at {start}"
 
