@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from gpo.io import partial
-from gpo.io.outputs import check_output, clear_abandoned, write_json, write_text, write_together
+from gpo.io.outputs import STAGING, check_output, clear_abandoned, write_json, write_text, write_together
 
 
 def test_write_json_makes_the_folder_and_reads_back(tmp_path):
@@ -128,20 +128,25 @@ def test_a_set_whose_writer_was_killed_is_whole_the_next_time_its_folder_is_used
 
 def test_a_partial_folder_of_a_writer_still_at_work_is_left_alone(tmp_path):
     """This process's, and another machine's (or an earlier version's, which named no machine) unless unchanged for
-    an hour."""
-    own = tmp_path / f".t.tum.{partial.HOST}-{os.getpid()}.partial"
-    elsewhere = tmp_path / f".u.tum.{partial.HOST}x-{os.getpid()}.partial"
-    stale = tmp_path / f".v.tum.{partial.HOST}x-{os.getpid()}.partial"
-    earlier = tmp_path / f".w.tum.{os.getpid()}.partial"
-    earlier_stale = tmp_path / f".x.tum.{os.getpid()}.partial"
-    for folder in (own, elsewhere, stale, earlier, earlier_stale):
+    an hour; a folder that only looks like one (it holds what no write puts there) is the user's."""
+    host, pid = partial.HOST, os.getpid()
+    own, elsewhere, stale = (
+        tmp_path / f".{name}.{host}{other}-{pid}.partial"
+        for name, other in (("t.tum", ""), ("u.tum", "x"), ("v.tum", "x"))
+    )
+    earlier, earlier_stale, users = (tmp_path / f".{name}.{pid}.partial" for name in ("w.tum", "x.tum", "photos"))
+    for folder in (own, elsewhere, stale, earlier, earlier_stale, users):
         folder.mkdir()
-        (folder / "x").write_text("half")
+        name = "holiday.jpg" if folder == users else STAGING.match(folder.name)["name"]
+        (folder / name).write_text("half")
     old = time.time() - partial.STALE_S - 60
-    for path in (stale / "x", stale, earlier_stale / "x", earlier_stale):
-        os.utime(path, (old, old))
+    for folder in (stale, earlier_stale, users):
+        for path in (*folder.iterdir(), folder):
+            os.utime(path, (old, old))
     assert clear_abandoned(tmp_path) == [stale, earlier_stale]
-    assert [path.name for path in sorted(tmp_path.iterdir())] == [own.name, elsewhere.name, earlier.name]
+    assert sorted(path.name for path in tmp_path.iterdir()) == sorted(
+        path.name for path in (own, elsewhere, earlier, users)
+    )
 
 
 def test_a_rename_that_fails_puts_the_old_set_back_and_the_new_one_beside_it(tmp_path, monkeypatch):

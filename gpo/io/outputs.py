@@ -33,9 +33,10 @@ from gpo.io import partial
 
 STAGING = re.compile(rf"^\.(?P<name>.+)\.{partial.TAG}\.partial$")
 """The hidden folder a file is written in before it is renamed into place: ``.NAME.TAG.partial``."""
-JOURNAL, FIRST, OLD = ".set", ".first", ".old"
-"""What a staging folder holds beside the new file NAME: the set's journal (in the first file's folder), the path of
-the first file's folder (in the others'), the file it replaces (a hard link or a copy, to put it back)."""
+JOURNAL, FIRST, OLD, TEMPORARY = ".set", ".first", ".old", ".tmp"
+"""What a staging folder holds beside the new file NAME: the set's journal (in the first file's folder; written
+through its name and ``TEMPORARY``), the path of the first file's folder (in the others'), the file it replaces (a
+hard link or a copy, to put it back)."""
 
 
 def check_output(path, inputs: Iterable = (), option: str = "--out", needed_bytes: int = 0) -> Path:
@@ -126,14 +127,12 @@ FULL = (errno.ENOSPC, errno.EDQUOT)
 def _full(path: Path, targets: list[Path]) -> OSError:
     """The error of a write of ``path`` (one of ``targets``, a set) that found the disk full: it names ``path`` and
     what was kept."""
-    if len(targets) == 1:
-        kept = "the file already there is kept as it was" if path.exists() else "nothing is left half written"
+    if not any(target.exists() for target in targets):
+        kept = "nothing is left half written"
+    elif len(targets) == 1:
+        kept = "the file already there is kept as it was"
     else:
-        kept = (
-            "the files already there are kept as they were"
-            if any(t.exists() for t in targets)
-            else ("nothing is left half written")
-        )
+        kept = "the files already there are kept as they were"
     error = OSError(f"{path}: the disk is full (no space left on the device); {kept}: free some room, then run again")
     error.errno = errno.ENOSPC
     return error
@@ -206,7 +205,7 @@ def _kept(target: Path, new: Path) -> Path | None:
 def _put_back(staged: dict[Path, Path], done: list[tuple[Path, Path | None]], error: OSError) -> OSError:
     """The set not replaced: its journal removed, the files renamed so far put back, every new file beside its old
     (``beside_path``); the error that says so."""
-    next(iter(staged.values())).with_name(next(iter(staged)).name + JOURNAL).unlink(missing_ok=True)
+    _journal_path(staged).unlink(missing_ok=True)
     for target, old in done:
         os.replace(target, beside_path(target))
         if old is not None:
@@ -232,11 +231,16 @@ def beside_path(path) -> Path:
     return path.with_name(f"{head}.new{dot}{rest}")
 
 
+def _journal_path(staged: dict[Path, Path]) -> Path:
+    """Where a set's journal is: in the first file's staging folder, the file's name and ``JOURNAL``."""
+    target, new = next(iter(staged.items()))
+    return new.with_name(target.name + JOURNAL)
+
+
 def _write_journal(staged: dict[Path, Path]) -> None:
-    """The set's journal in the first file's folder: each new file and its target, through a temporary name."""
-    first_target, first = next(iter(staged.items()))
-    journal = first.with_name(first_target.name + JOURNAL)
-    temporary = journal.with_name(journal.name + ".tmp")
+    """The set's journal: each new file and its target, through a temporary name."""
+    journal = _journal_path(staged)
+    temporary = journal.with_name(journal.name + TEMPORARY)
     temporary.write_text(json.dumps([[str(new), str(target)] for target, new in staged.items()]))
     os.replace(temporary, journal)
 
@@ -248,10 +252,20 @@ def clear_abandoned(folder) -> list[Path]:
     cleared = []
     for entry in sorted(Path(folder).glob(".*.partial")):
         found = STAGING.match(entry.name)
-        if found and entry.is_dir() and partial.abandoned(found["host"], int(found["pid"]), entry):
+        if found and _staging(entry, found["name"]) and partial.abandoned(found["host"], int(found["pid"]), entry):
             _finish(entry, found["name"])
             cleared.append(entry)
     return cleared
+
+
+def _staging(folder: Path, name: str) -> bool:
+    """Whether ``folder`` is a staging folder of the file ``name``: a folder holding nothing but what a write puts
+    there (a folder the user named alike is left alone)."""
+    ours = {name, *(name + extra for extra in (JOURNAL, JOURNAL + TEMPORARY, FIRST, OLD))}
+    try:
+        return folder.is_dir() and all(child.name in ours for child in folder.iterdir())
+    except OSError:  # removed meanwhile
+        return False
 
 
 def _finish(folder: Path, name: str) -> None:
