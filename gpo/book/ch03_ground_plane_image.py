@@ -1,4 +1,5 @@
-"""Chapter 03, the ground plane image (GPI): eq. 22's corners moved by hand, and how far the GPI reaches."""
+"""Chapter 03, the ground plane image (GPI): eq. 22's corners moved by hand, how far the GPI reaches, and how many
+GPI rows one front-face pixel spreads over as the floor recedes."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from gpo.book.figures import draw_floor_image
 from gpo.book.panels import int_slider, slider
 from gpo.floor_image.analytic import analytic_table, route_difference
 from gpo.floor_image.cubemap import Cubemap
-from gpo.floor_image.gpi import front_face_corners, ground_plane_image
+from gpo.floor_image.gpi import apply_homography, front_face_corners, ground_plane_image
 from gpo.floor_image.image import GroundImageError
 
 GPI_CORNER_NAMES = ("near-right", "far-right", "far-left", "near-left")
@@ -100,3 +101,18 @@ def gpi_extent_panel(fisheye_image, camera, placement, mount=None) -> widgets.VB
 
     output = widgets.interactive_output(redraw, {"ahead_m": ahead, "bottom_rows": rows})
     return widgets.VBox([widgets.HBox([ahead, rows]), output])
+
+
+def rows_per_face_pixel(gpi, reach_m: float, samples: int = 400) -> tuple[np.ndarray, np.ndarray]:
+    """How many GPI rows one front-face pixel spreads over, along the GPI's middle column, against the distance
+    ahead of the seam (the front face's bottom edge), from 0 to ``reach_m`` metres: the GPI's rows continued ahead by
+    eq. 22's homography (``gpi``, a ``GroundPlaneImage``). Returns (distance [m], rows per face pixel); NaN past the
+    horizon."""
+    ahead = np.linspace(0.0, reach_m, samples)
+    rows = gpi.front_rows - 0.5 - ahead / gpi.floor.metres_per_pixel  # image up is forward
+    column = np.column_stack([np.full(samples, (gpi.size[0] - 1) / 2.0), rows])
+    to_face = np.linalg.inv(gpi.homography)
+    next_row = apply_homography(to_face, column + np.array([0.0, 1.0]))
+    step = np.linalg.norm(next_row - apply_homography(to_face, column), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return ahead, 1.0 / step
