@@ -1,6 +1,8 @@
 """Chapter 05, KLT flow on the floor image: a recording's floor images, the tracks and their motion vectors (the first
-paper's Fig. 17), a frame's quality and its tracks against the truth in one line, and the tracker's panel. The first
-paper's Table 3 (the mean and the median vector on the short paths) is ``gpo.experiments.table3``."""
+paper's Fig. 17), a frame's quality and its tracks against the truth in one line, and the chapter's figures:
+Lucas-Kanade's Newton steps on one window, the tracks each pyramid depth keeps, the forward-backward check on a frame,
+the median and the mean vector's error frame by frame, the first paper's Table 3 beside the suite's; and the tracker's
+panel. The table itself (the mean and the median vector on the short paths) is ``gpo.experiments.table3``."""
 
 from __future__ import annotations
 
@@ -16,6 +18,122 @@ from gpo.motion.klt import FloorFlow, KLTParameters
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
 FLOW_COLOURS = {"inlier": "tab:green", "outlier": "tab:red", "median": "tab:blue", "mean": "tab:orange"}
+RIGHT_PX = 1.0  # a track ending this close to where its floor point truly is counts as right in the figures
+
+
+def draw_lk_steps(window, residuals, history, target) -> plt.Figure:
+    """Lucas-Kanade on one window: the previous image's ``window`` (2h+1, 2h+1), the temporal difference I_t over it
+    at the start (``residuals[0]``, at the first guess) and after the first, the second and the last Newton step
+    (``residuals[k]`` taken at ``history[k - 1]``, the displacement (2,) pixels after step k), all on one grey scale;
+    and how far each step's displacement lies from the truth's ``target`` (2,) pixels."""
+    shown = [0, 1, 2, len(residuals) - 1]
+    fig, axes = plt.subplots(1, 6, figsize=(16, 3.1), gridspec_kw={"width_ratios": [1, 1, 1, 1, 1, 1.6]})
+    axes[0].imshow(window, cmap="gray")
+    axes[0].set_title("the window in I")
+    limit = float(np.abs(residuals[0]).max())
+    for ax, k in zip(axes[1:5], shown, strict=True):
+        ax.imshow(residuals[k], cmap="RdBu", vmin=-limit, vmax=limit)
+        rms = float(np.sqrt(np.mean(residuals[k] ** 2)))
+        ax.set_title(f"I_t {'at the guess' if k == 0 else f'after step {k}'}\nRMS {rms:.2f}", fontsize="medium")
+    for ax in axes[:5]:
+        ax.set_axis_off()
+    off = [np.hypot(*(np.asarray(d) - target)) for d in history]
+    axes[5].semilogy(range(1, len(off) + 1), off, "o-", color="tab:blue")
+    axes[5].set(xlabel="Newton step", ylabel="|d - truth| [px]", title="the displacement's error")
+    axes[5].grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def _draw_tracks(ax, image, start, end, right) -> None:
+    """``image`` with tracks from ``start`` to ``end`` (N, 2) drawn as arrows, the ``right`` ones (N,) bool green and
+    the others red."""
+    ax.imshow(image, cmap="gray", vmin=0, vmax=255)
+    for chosen, colour in ((right, "tab:green"), (~right, "tab:red")):
+        if chosen.any():
+            vectors = end[chosen] - start[chosen]
+            ax.quiver(*start[chosen].T, *vectors.T, angles="xy", scale_units="xy", scale=1.0, width=0.006, color=colour)
+    ax.set_xlim(-0.5, image.shape[1] - 0.5)
+    ax.set_ylim(image.shape[0] - 0.5, -0.5)
+    ax.set_axis_off()
+
+
+def draw_pyramid_levels(image, rows) -> plt.Figure:
+    """One floor image per row of ``rows`` ((title, ``FlowMeasurement``, the kept tracks' true ends (N, 2) pixels)),
+    side by side: the kept tracks as arrows, green where they end within ``RIGHT_PX`` of the truth, red elsewhere."""
+    fig, axes = plt.subplots(1, len(rows), figsize=(3.3 * len(rows), 3.8))
+    for ax, (title, measurement, true_end) in zip(axes, rows, strict=True):
+        right = np.hypot(*(measurement.end - true_end).T) < RIGHT_PX
+        _draw_tracks(ax, image, measurement.start, measurement.end, right)
+        ax.set_title(f"{title}\n{len(right)} kept, {int(right.sum())} right", fontsize="medium")
+    fig.tight_layout()
+    return fig
+
+
+def draw_forward_backward(image, start, end, error, true_error, threshold) -> plt.Figure:
+    """The forward-backward check on one frame. Left: ``image`` with the tracks from ``start`` to ``end`` (N, 2)
+    pixels, those whose forward-backward ``error`` (N,) pixels is under ``threshold`` (kept) in green, the rest
+    (refused) in red. Right: the histogram of ``error`` on a log scale, split by the truth (``true_error`` (N,): how
+    far each track ends from where its floor point truly is, right under ``RIGHT_PX``), with the threshold."""
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.6), gridspec_kw={"width_ratios": [1, 1.5]})
+    kept = error < threshold
+    _draw_tracks(left, image, start, end, kept)
+    left.set_title(f"{int(kept.sum())} kept (green), {int((~kept).sum())} refused (red)")
+    bins = np.logspace(-2, 2, 33)
+    clipped = np.clip(error, bins[0], bins[-1])
+    truly = true_error < RIGHT_PX
+    right.hist(
+        [clipped[truly], clipped[~truly]],
+        bins=bins,
+        stacked=True,
+        color=["tab:green", "tab:red"],
+        label=[f"ends within {RIGHT_PX:g} px of the truth", "ends further from it"],
+    )
+    right.axvline(threshold, color="k", ls="--", label=f"the check: {threshold:g} px")
+    right.set_xscale("log")
+    right.set(xlabel="forward-backward error [px]", ylabel="tracks", title="how far each track came back")
+    right.legend(fontsize="small")
+    fig.tight_layout()
+    return fig
+
+
+def draw_vector_errors(errors, outliers, frames) -> plt.Axes:
+    """The median and the mean vector's error against the truth (``errors`` (N, 2) pixels: median, mean) at each of
+    ``frames`` (N,), on a log scale, the frames where some kept vectors are outliers (``outliers`` (N,) bool) shaded."""
+    _, ax = plt.subplots(figsize=(12, 3.4))
+    for edge in np.flatnonzero(np.diff(np.r_[0, outliers.astype(int), 0])).reshape(-1, 2):
+        ax.axvspan(frames[edge[0]] - 0.5, frames[edge[1] - 1] + 0.5, color="0.9", lw=0)
+    ax.semilogy(frames, errors[:, 1], color=FLOW_COLOURS["mean"], lw=1, label="mean vector")
+    ax.semilogy(frames, errors[:, 0], color=FLOW_COLOURS["median"], lw=1, label="median vector")
+    ax.fill_between([], [], color="0.9", label="frames with tracks off the floor's motion")
+    ax.set(xlabel="frame", ylabel="off the truth [px]")
+    ax.grid(True, which="major", alpha=0.3)
+    ax.legend(fontsize="small", loc="upper right", ncols=3)
+    return ax
+
+
+def draw_table3(paper, ours, columns) -> plt.Figure:
+    """The first paper's Table 3 beside the suite's: for each of ``columns`` (the tests, then their average), the
+    average relative translation error with the mean and with the median vector as bars, the minimum to the maximum
+    as a line; ``paper`` and ``ours``: ``gpo.experiments.table3.PaperTable3.values``' layout, metres; drawn in mm."""
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4))
+    x = np.arange(len(columns))
+    for ax, values, title in (
+        (axes[0], paper, "the paper's Table 3: a real robot"),
+        (axes[1], ours, "the suite: the simulated short paths"),
+    ):
+        for offset, vector in ((-0.2, "mean"), (0.2, "median")):
+            average, low, high = (1e3 * np.array(values[vector, s]) for s in ("avg", "min", "max"))
+            ax.bar(x + offset, average, 0.38, color=FLOW_COLOURS[vector], label=f"{vector} vector: average")
+            ax.vlines(x + offset, low, high, color="k", lw=1.5)
+        ax.vlines([], [], [], color="k", lw=1.5, label="minimum to maximum")
+        ax.set_xticks(x, columns)
+        ax.set_ylim(0, 1.3e3 * max(max(values[vector, "max"]) for vector in ("mean", "median")))
+        ax.set(ylabel="relative translation error [mm]", title=title)
+        ax.grid(True, axis="y", alpha=0.3)
+    axes[0].legend(fontsize="small", ncols=3, loc="upper center")
+    fig.tight_layout()
+    return fig
 
 
 def draw_flow_vectors(image, measurement, ax=None, scale: float = 1.0) -> plt.Axes:
