@@ -90,7 +90,7 @@ class LiveOdometer:
         if problem:
             raise RefusedMessage(f"image: {problem}")
         record = self.floor.step(stamp_ns, image)
-        self._last_ns = max(stamp_ns, self._last_ns or stamp_ns)
+        self._last_ns = stamp_ns if self._last_ns is None else max(self._last_ns, stamp_ns)
         if self.fusion is not None and record.status is not Status.SKIPPED:
             self._keep(
                 self.fusion.add_floor(stamp_ns * 1e-9, record.pose, record.fused_inliers, record.fused_spread_px)
@@ -118,7 +118,7 @@ class LiveOdometer:
                 (Rotation.identity(), np.zeros(3)),
             )
             pose = np.array([*base.positions[0, :2], base.yaw[0]])
-        self._last_ns = max(stamp_ns, self._last_ns or stamp_ns)
+        self._last_ns = stamp_ns if self._last_ns is None else max(self._last_ns, stamp_ns)
         self._keep(self.fusion.add_tracking(stamp_ns * 1e-9, pose))
 
     def finish(self) -> None:
