@@ -19,10 +19,13 @@ python -m gpo sweep SPEC.yaml --out DIR [--scheduler tcp://HOST:PORT] [--workers
 python -m gpo sweep-report DIR    PNG plots of a sweep's errors against each parameter, per recording and overall
 
 Every command checks its inputs and output paths before it works, never writes onto one of its inputs, and
-writes each file to a temporary name and then renames it; a result it flags (an unreliable calibration, a run
-stopped early, interrupted, or that measured fewer than half its frames) does not replace a file already there but
-goes beside it (``NAME.flagged.EXT``), unless ``--force``. A command module imports what only it needs (the
-simulator, matplotlib, Dask) inside its ``run``, so that every command starts quickly.
+writes each file to a temporary name and then renames it, the files of one result as one set
+(``gpo.io.outputs.write_together``); a result it flags (an unreliable calibration, a run stopped early, interrupted,
+or that measured fewer than half its frames) does not replace a file already there but goes beside it
+(``NAME.flagged.EXT``), unless ``--force``. Ctrl-C and SIGTERM end a command with exit code 130 and no traceback
+whenever they come; a run writes the frames it did, whatever a second signal does (``common.Interruption``). A
+command module imports what only it needs (the simulator, matplotlib, Dask) inside its ``run``, so that every command
+starts quickly.
 """
 
 from __future__ import annotations
