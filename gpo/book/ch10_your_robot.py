@@ -1,16 +1,20 @@
-"""Chapter 10, your robot: the commands run as a user runs them, and what a mount measured wrong does to a run."""
+"""Chapter 10, your robot: the commands run as a user runs them, and what a mount measured wrong does to a run (its
+paths drawn over the truth)."""
 
 from __future__ import annotations
 
 import dataclasses
 import subprocess
 import sys
+from dataclasses import dataclass
 
+import matplotlib.pyplot as plt
 import numpy as np
 
+from gpo.book.figures import draw_placed_paths
 from gpo.cameras.rig import CameraMount
-from gpo.io.bag import Recording
-from gpo.metrics import final_error
+from gpo.io.trajectory import Trajectory
+from gpo.metrics import FinalError, final_error, place_on_truth
 from gpo.pipeline.config import OdometryConfig
 from gpo.pipeline.run import run
 
@@ -47,17 +51,33 @@ def mistaken_mounts(mount: CameraMount) -> dict[str, CameraMount]:
     }
 
 
-def mistakes_table(bag, config: OdometryConfig, truth_topic: str = "/mocap/base_link") -> str:
-    """``config`` run on ``bag`` with each of ``mistaken_mounts`` of its mount: the distance the run travelled (m),
-    its final position error (mm, and % of the truth's distance) and final heading error (deg), as text."""
-    with Recording(bag) as recording:
-        truth = recording.trajectory(truth_topic)
-    lines = [f"{'mount':<24}{'distance':>10}{'final error':>14}{'heading':>10}"]
+@dataclass(frozen=True)
+class MistakenRun:
+    """A run with a mistaken mount: its ``trajectory``, its ``error`` at the end against the truth
+    (``gpo.metrics.final_error``) and the distance it ``travelled_m`` (metres)."""
+
+    trajectory: Trajectory
+    error: FinalError
+    travelled_m: float
+
+
+def mistaken_runs(bag, config: OdometryConfig, truth: Trajectory) -> dict[str, MistakenRun]:
+    """``config`` run on ``bag`` with each of ``mistaken_mounts`` of its mount, each against ``truth``."""
+    runs = {}
     for name, mount in mistaken_mounts(config.rig.mount).items():
         wrong = config.replace(rig=dataclasses.replace(config.rig, mount=mount))
-        result = run(bag, wrong, progress=False)
-        error = final_error(result.trajectory, truth)
-        travelled = np.sum(np.linalg.norm(np.diff(result.trajectory.positions[:, :2], axis=0), axis=1))
-        lines.append(f"{name:<24}{travelled:>8.3f} m{1e3 * error.position_m:>10.1f} mm"
-                     f"{np.degrees(error.heading_rad):>8.2f} deg  ({error.percent:.1f} % of {error.distance_m:.2f} m)")
-    return "\n".join(lines)
+        trajectory = run(bag, wrong, progress=False).trajectory
+        travelled = float(np.sum(np.linalg.norm(np.diff(trajectory.positions[:, :2], axis=0), axis=1)))
+        runs[name] = MistakenRun(trajectory, final_error(trajectory, truth), travelled)
+    return runs
+
+
+def draw_mistakes(runs: dict[str, MistakenRun], truth: Trajectory, ax=None) -> plt.Axes:
+    """Top view of ``mistaken_runs``' paths, each placed on ``truth`` by its first pose, over the truth."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(9, 6))
+    placed = {name: place_on_truth(mistaken.trajectory, truth)[0].positions[:, :2] for name, mistaken in runs.items()}
+    styles = {"as measured": {"color": "k", "lw": 2}}
+    draw_placed_paths(placed, truth, ax=ax, styles=styles, truth_end=True)
+    ax.set_title("the same bag, the mount measured with each mistake")
+    return ax
