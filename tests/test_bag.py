@@ -616,6 +616,20 @@ def test_an_os_error_of_reading_the_messages_names_the_bag(tmp_path, monkeypatch
             next(frames)
 
 
+def test_an_os_error_of_opening_a_bag_names_it(tmp_path, monkeypatch):
+    """A ROS 1 bag's chunk position damaged, sought past what the file system allows (the campaign, seed 48101)."""
+    path = bag_path(tmp_path, "ros1")
+    with BagWriter(path, "ros1") as writer:
+        writer.add_image("/camera", T0, np.zeros((64, 64), np.uint8), CAMERA_FRAME)
+
+    def seek_refused(self):
+        raise OSError(errno.EINVAL, "Invalid argument")
+
+    monkeypatch.setattr(AnyReader, "open", seek_refused)
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))} is not a readable ros1 recording \(Invalid arg"):
+        Recording(path)
+
+
 @pytest.mark.parametrize("bag_format", FORMATS)
 def test_an_empty_recording_is_refused(tmp_path, bag_format):
     path = bag_path(tmp_path, bag_format)

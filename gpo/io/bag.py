@@ -143,9 +143,10 @@ class Recording:
         try:
             self.reader = AnyReader([source], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
             self.reader.open()
-        except _DAMAGED as error:
+        except (*_DAMAGED, OSError) as error:  # an OSError: a damaged offset sought past what the file system allows
             hint = _repair_hint(self.path)
-            raise ValueError(f"{self.path} is not a readable {self.format} recording ({error}).{hint}") from error
+            reason = error.strerror if isinstance(error, OSError) and error.strerror else error
+            raise ValueError(f"{self.path} is not a readable {self.format} recording ({reason}).{hint}") from error
         self._check_index()
         if self.reader.message_count == 0:
             self.close()
