@@ -58,6 +58,9 @@ from gpo.motion.ranges import MAX_IMAGE_PX, OutOfRange, check_rules, in_range
 DETECTORS = ("orb", "sift")
 
 
+FOLLOWERS = ("match", "lk")  # how a keyframe's keypoints are found in later frames (``FeatureParameters.follow``)
+
+
 SUPPORT_PER_SIZE = {"orb": 0.5, "sift": 3.0}  # the descriptor support's radius over the keypoint diameter
 
 
@@ -112,6 +115,10 @@ class FeatureParameters:
     ``keyframe``: how long the frames after a keyframe are matched with it instead of with the frame before them
     (``gpo.motion.keyframes``; the share is of the kept matches of the first frame matched with it); the paper's is
     ``FRAME_TO_FRAME``, every frame matched with the one before.
+    ``follow``: how the keyframe's keypoints are found in the frames after it: ``match``, keypoints detected and
+    described in every frame and matched with the keyframe's (``FeatureTracker``, the paper's way), or ``lk``,
+    followed from frame to frame by pyramidal Lucas-Kanade and detected only on keyframes
+    (``gpo.motion.following.KeypointFollower``).
     """
 
     detector: str = "orb"
@@ -136,6 +143,7 @@ class FeatureParameters:
     band_floor_px: float = LOCALISATION_PX
     short_side_px: float = SHORT_SIDE_PX
     keyframe: KeyframePolicy = field(default=FRAME_TO_FRAME)
+    follow: str = "match"
 
     def __post_init__(self):
         if isinstance(self.roi, list):  # as YAML gives it
@@ -178,6 +186,7 @@ class FeatureParameters:
             "band_floor_px": in_range(self.band_floor_px, 0, 100, " px (0: plain mu +- sigma)"),
             "short_side_px": in_range(self.short_side_px, 0, 100, " px (0: every side judged)"),
             "keyframe": (isinstance(self.keyframe, KeyframePolicy), "a keyframe policy: min_overlap and max_frames"),
+            "follow": (self.follow in FOLLOWERS, f"one of {', '.join(map(repr, FOLLOWERS))}"),
         }
 
 
@@ -566,7 +575,7 @@ class FeatureTracker:
     def track(self, image: np.ndarray, mask=None) -> FeatureMatches | None:
         """The matches from the keyframe to ``image`` (H, W) uint8, ``mask`` as for ``detect``."""
         seconds = {}
-        current = _timed(seconds, "detect", detect, image, self.parameters, mask)
+        current = timed(seconds, "detect", detect, image, self.parameters, mask)
         return self.follow(current, seconds)
 
     def follow(self, current: Keypoints, seconds: dict | None = None) -> FeatureMatches | None:
@@ -590,28 +599,48 @@ class FeatureTracker:
     def matches(self, previous: Keypoints, current: Keypoints, seconds: dict | None = None) -> FeatureMatches:
         """Match two frames' keypoints and filter the matches with the stages the parameters switch on, stopping
         at the first that leaves too few."""
-        p, seconds = self.parameters, dict(seconds or {})
-        pairs = _timed(seconds, "match", match, previous, current, p)
-        start, end = previous.points[pairs[:, 0]], current.points[pairs[:, 1]]
-        kept, histogram, invariance = np.ones(len(pairs), bool), None, None
-        flag = _too_few_to_filter(len(previous), len(current), len(pairs), p.min_matches)
-        if flag is None and p.histogram_filter:
-            bins = (p.orientation_bins, p.length_bins, p.circular_binning, p.band_floor_px)
-            kept, *stages = _timed(seconds, "histogram", histogram_filter, start, end, *bins)
-            histogram = tuple(stages)
-            flag = _too_few_left(int(kept.sum()), "histogram filter", p.min_matches)
-        if flag is None and p.invariance_check:
-            chosen = np.flatnonzero(kept)
-            check = (start[chosen], end[chosen], p.invariance_threshold, p.cardinality, p.rounds, self._rng,
-                     p.short_side_px)
-            invariance = _timed(seconds, "invariance", invariance_check, *check)
-            kept = np.zeros(len(pairs), bool)
-            kept[chosen[invariance.kept]] = True
-            flag = _too_few_left(int(kept.sum()), "invariance check", p.min_matches)
-        return FeatureMatches(previous, current, pairs, histogram, invariance, kept, flag, seconds)
+        return matched(previous, current, self.parameters, self._rng, seconds)
 
 
-def _timed(seconds: dict, stage: str, function, *arguments):
+def matched(
+    previous: Keypoints, current: Keypoints, parameters: FeatureParameters, rng: np.random.Generator,
+    seconds: dict | None = None,
+) -> FeatureMatches:
+    """Two frames' keypoints matched (``match``) and ``filtered``; the wall time of each stage is added to a copy of
+    ``seconds``."""
+    seconds = dict(seconds or {})
+    pairs = timed(seconds, "match", match, previous, current, parameters)
+    flag = _too_few_to_filter(len(previous), len(current), len(pairs), parameters.min_matches)
+    return filtered(previous, current, pairs, parameters, rng, seconds, flag)
+
+
+def filtered(
+    previous: Keypoints, current: Keypoints, pairs: np.ndarray, parameters: FeatureParameters,
+    rng: np.random.Generator, seconds: dict, flag: str | None = None,
+) -> FeatureMatches:
+    """The matches ``pairs`` (M, 2) of ``previous`` and ``current`` through the filters ``parameters`` switch on (the
+    histogram filter, then the invariance check drawing from ``rng``), stopping at the first that leaves too few;
+    ``flag``: why they are not filtered at all (too few to start with). Each stage's wall time is added to
+    ``seconds``, which the result keeps."""
+    p = parameters
+    start, end = previous.points[pairs[:, 0]], current.points[pairs[:, 1]]
+    kept, histogram, invariance = np.ones(len(pairs), bool), None, None
+    if flag is None and p.histogram_filter:
+        bins = (p.orientation_bins, p.length_bins, p.circular_binning, p.band_floor_px)
+        kept, *stages = timed(seconds, "histogram", histogram_filter, start, end, *bins)
+        histogram = tuple(stages)
+        flag = _too_few_left(int(kept.sum()), "histogram filter", p.min_matches)
+    if flag is None and p.invariance_check:
+        chosen = np.flatnonzero(kept)
+        check = (start[chosen], end[chosen], p.invariance_threshold, p.cardinality, p.rounds, rng, p.short_side_px)
+        invariance = timed(seconds, "invariance", invariance_check, *check)
+        kept = np.zeros(len(pairs), bool)
+        kept[chosen[invariance.kept]] = True
+        flag = _too_few_left(int(kept.sum()), "invariance check", p.min_matches)
+    return FeatureMatches(previous, current, pairs, histogram, invariance, kept, flag, seconds)
+
+
+def timed(seconds: dict, stage: str, function, *arguments):
     """``function(*arguments)``, its wall time added to ``seconds[stage]``."""
     started = time.perf_counter()
     result = function(*arguments)

@@ -483,13 +483,7 @@ class FloorFlow:
         texture = floor_texture(floor - local_mean, self._valid)
         if not self.parameters.normalise_brightness:
             return image, texture
-        sample = np.s_[::STATISTICS_STEP, ::STATISTICS_STEP]  # a quarter of the pixels: plenty for mean and spread
-        mask = None if self._valid is None else self._valid[sample]
-        if self.parameters.flat_field_px:
-            floor = cv2.divide(floor, local_mean)  # where the local mean is 0, so is the image: 0
-        mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(floor[sample], mask=mask))
-        gain = GREY_SPREAD / max(spread, 1e-6)
-        return cv2.convertScaleAbs(floor, alpha=gain, beta=GREY_MEAN - gain * mean), texture
+        return levelled(floor, local_mean if self.parameters.flat_field_px else None, self._valid), texture
 
     def _shrunk_mask(self, shape) -> np.ndarray:
         """Where a corner's whole window lies inside the mask and the image."""
@@ -562,6 +556,19 @@ class _Turn:
     def from_view(self, pixels: np.ndarray) -> np.ndarray:
         """The view's ``pixels`` (N, 2) where the image has them."""
         return ((pixels - self.centre) @ self._rotation.T + self.centre).astype(np.float32)
+
+
+def levelled(image: np.ndarray, local_mean: np.ndarray | None = None, valid: np.ndarray | None = None) -> np.ndarray:
+    """``image`` (H, W) float32 divided by its ``local_mean`` (H, W) float32 (a flat field; None: not) and scaled to
+    the mean ``GREY_MEAN`` and the standard deviation ``GREY_SPREAD`` over the pixels ``valid`` (uint8, nonzero; None:
+    all), as uint8: the brightness Lucas-Kanade sees, whatever the exposure (``FloorFlow._normalised``)."""
+    sample = np.s_[::STATISTICS_STEP, ::STATISTICS_STEP]  # a quarter of the pixels: plenty for mean and spread
+    mask = None if valid is None else valid[sample]
+    if local_mean is not None:
+        image = cv2.divide(image, local_mean)  # where the local mean is 0, so is the image: 0
+    mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(image[sample], mask=mask))
+    gain = GREY_SPREAD / max(spread, 1e-6)
+    return cv2.convertScaleAbs(image, alpha=gain, beta=GREY_MEAN - gain * mean)
 
 
 def floor_texture(detail: np.ndarray, valid: np.ndarray | None = None) -> float:

@@ -13,6 +13,7 @@ from gpo.floor_image.analytic import analytic_table
 from gpo.floor_image.gpi import ground_plane_image
 from gpo.floor_image.image import GroundImageError, RemapTable
 from gpo.floor_image.ortho import ortho_rectify
+from gpo.motion.following import FollowFrame, KeypointFollower
 from gpo.motion.keyframes import FRAME_TO_FRAME
 from gpo.motion.keypoints import FeatureMatches, FeatureTracker, Keypoints, detect
 from gpo.motion.klt import FloorFlow, FlowFrame, FlowMeasurement
@@ -115,8 +116,11 @@ class FloorOdometer:
         geometry = FloorGeometry(None if keypoints_route else config.floor, config.rig.camera, config.rig.mount)
         self.estimator = config.estimator(config, geometry)
         if self.estimator.MOTION == "keypoints":
-            self.motion = FeatureTracker(config.features)
             self._mask = None if keypoints_route else self.table.valid.astype(np.uint8)
+            if config.features.follow == "lk":
+                self.motion = KeypointFollower(config.features, config.klt, self._mask)
+            else:
+                self.motion = FeatureTracker(config.features)
         else:
             policy = config.keyframe if self.estimator.KEYFRAMES else FRAME_TO_FRAME
             self.motion = FloorFlow(config.klt, mask=self.table.valid, keyframe=policy)
@@ -164,8 +168,9 @@ class FloorOdometer:
         """What makes ``image`` nothing ``step`` takes, in words ("expected ..., got ..."), or None. ``step`` takes a
         grey camera frame, a 2-D uint8 (or uint16: mono16) array of the calibration's size; what ``prepare`` makes of
         one for this odometer's method (a ``FlowFrame`` of the floor image's size for the KLT methods, ``Keypoints``
-        for a keypoint method); or an ``Unreadable`` frame, which it skips. (``step`` itself skips a frame of another
-        size after the first, as a recording's reader flags one.)"""
+        for a keypoint method that matches them, a ``FollowFrame`` for one that follows them); or an ``Unreadable``
+        frame, which it skips. (``step`` itself skips a frame of another size after the first, as a recording's reader
+        flags one.)"""
         height, width = self.frame_shape
         frame = f"a grey camera frame, a 2-D uint8 (or uint16) array of {width} x {height} pixels (width x height)"
         if isinstance(image, Unreadable):
@@ -176,13 +181,21 @@ class FloorOdometer:
             if image.shape != (height, width):
                 return f"expected {frame}, got {image.shape[1]} x {image.shape[0]}"
             return None
-        keypoints = self.estimator.MOTION == "keypoints"
-        if isinstance(image, Keypoints if keypoints else FlowFrame):
+        kind, prepared = self._prepared_kind
+        if isinstance(image, kind):
             return self._prepared_refusal(image)
-        prepared = "Keypoints" if keypoints else "a FlowFrame"
         return f"expected {frame}, {prepared} (what prepare makes of one) or Unreadable, got {type(image).__name__}"
 
-    def _prepared_refusal(self, prepared: FlowFrame | Keypoints) -> str | None:
+    @property
+    def _prepared_kind(self) -> tuple[type, str]:
+        """What ``prepare`` makes of a frame for this odometer's method, and its name in words."""
+        if isinstance(self.motion, KeypointFollower):
+            return FollowFrame, "a FollowFrame"
+        if isinstance(self.motion, FeatureTracker):
+            return Keypoints, "Keypoints"
+        return FlowFrame, "a FlowFrame"
+
+    def _prepared_refusal(self, prepared: FlowFrame | Keypoints | FollowFrame) -> str | None:
         """What makes ``prepared`` (of this odometer's kind) other than ``prepare`` makes it, or None."""
         if isinstance(prepared, Keypoints):
             counts = {len(prepared.points), len(prepared.descriptors), len(prepared.sizes)}
@@ -192,6 +205,12 @@ class FloorOdometer:
                 f"expected Keypoints of as many points (N, 2) as descriptors and sizes, got points of shape "
                 f"{prepared.points.shape}, {len(prepared.descriptors)} descriptors, {len(prepared.sizes)} sizes"
             )
+        if isinstance(prepared, FollowFrame):
+            shape = self.frame_shape if self.config.route is Route.KEYPOINTS else self.table.valid.shape
+            if prepared.image.dtype == np.uint8 and prepared.image.shape == shape:
+                return None
+            got = f"a {prepared.image.dtype} one of shape {prepared.image.shape}"
+            return f"expected a FollowFrame of a uint8 image of shape {shape}, got {got}"
         shape = self.table.valid.shape
         wide = None if self._overview_table is None else self._overview_table.valid.shape
         if prepared.image.dtype != np.uint8 or prepared.image.shape != shape:
@@ -208,22 +227,25 @@ class FloorOdometer:
             raise ValueError(f"keypoints are read by a keypoint method, this odometer's method is {self.config.method}")
         return detect(self.floor_image(image), self.config.features, self._mask)
 
-    def prepare(self, image: np.ndarray | Unreadable) -> FlowFrame | Keypoints | Unreadable:
+    def prepare(self, image: np.ndarray | Unreadable) -> FlowFrame | Keypoints | FollowFrame | Unreadable:
         """What ``step`` does to a camera frame (H, W) before it tracks it, which depends on the frame alone: its floor
-        image made ready for the KLT flow (``FlowFrame``), or for a keypoint method its ``keypoints``; a frame of
-        another size than the calibration's as ``OtherSize``. Frames can so be prepared ahead, in another thread,
+        image made ready for the KLT flow (``FlowFrame``), for a keypoint method that matches keypoints its
+        ``keypoints``, for one that follows them the image with its pyramid (``FollowFrame``); a frame of another size
+        than the calibration's as ``OtherSize``. Frames can so be prepared ahead, in another thread,
         while the odometer steps through earlier ones (``gpo.pipeline.run.odometry`` with ``threads``)."""
         if not isinstance(image, np.ndarray):
             return image  # unreadable, or prepared already
         if image.shape[:2] != self.frame_shape:
             size = image.shape[1::-1]
             return OtherSize(f"{size[0]} x {size[1]} pixels, not the calibration's", size)
+        if isinstance(self.motion, KeypointFollower):
+            return self.motion.prepare(self.floor_image(image))
         if self.estimator.MOTION == "keypoints":
             return self.keypoints(image)
         overview = None if self._overview_table is None else self._overview_table.apply(image)
         return self.motion.prepare(self.floor_image(image), overview)
 
-    def step(self, stamp_ns: int, image: np.ndarray | FlowFrame | Keypoints | Unreadable) -> FrameRecord:
+    def step(self, stamp_ns: int, image: np.ndarray | FlowFrame | Keypoints | FollowFrame | Unreadable) -> FrameRecord:
         """Take one camera frame (H, W) in stamp order, or what ``prepare`` made of it; return its record. A frame that
         cannot be read (``Unreadable``), or after the first one whose size is not the calibration's, is skipped and
         flagged with the reason."""
@@ -263,7 +285,9 @@ class FloorOdometer:
         self._measured_ns = stamp_ns
         return self._record(stamp_ns, measurement, Status.MEASURED)
 
-    def _track(self, floor: FlowFrame | Keypoints, stamp_ns: int) -> FlowMeasurement | FeatureMatches | None:
+    def _track(
+        self, floor: FlowFrame | Keypoints | FollowFrame, stamp_ns: int
+    ) -> FlowMeasurement | FeatureMatches | None:
         if isinstance(self.motion, FeatureTracker):
             return self.motion.follow(floor)
         if isinstance(floor, Keypoints):

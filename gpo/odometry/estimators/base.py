@@ -70,12 +70,11 @@ class FloorGeometry:
         """A displacement (2,) in floor-image pixels as one in base_link, metres."""
         return self._to_metres[0].T @ vector
 
-    def on_floor(self, start_px: np.ndarray, end_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Pixel pairs (N, 2) as floor points of base_link (metres), and which pairs reach the floor at both ends."""
+    def on_floor(self, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels (N, 2) as floor points (N, 2) of base_link (metres), and which of them reach the floor (N,)."""
         if self.floor is not None:
-            return self.metres(start_px), self.metres(end_px), np.ones(len(start_px), dtype=bool)
-        (start, seen_start), (end, seen_end) = (pixels_to_floor(self.camera, self.mount, p) for p in (start_px, end_px))
-        return start, end, seen_start & seen_end
+            return self.metres(pixels), np.ones(len(pixels), dtype=bool)
+        return pixels_to_floor(self.camera, self.mount, pixels)
 
 
 class FloorEstimator(ABC):

@@ -85,14 +85,33 @@ def turn_about_kept(start, end, kept, min_lever: float) -> np.ndarray | None:
 
 
 class RigidKeypoints(FloorEstimator):
-    """The rigid transform of the kept matches, on the floor, refitted on every match it explains to ``refit_px``."""
+    """The rigid transform of the kept matches, on the floor, refitted on every match it explains to ``refit_px``.
+
+    Each frame's keypoints are put on the floor once: a frame is the start of the next frame's matches, and a keyframe
+    of every frame's until the next (the two latest frames' floor points are held)."""
 
     NAME = "features"
     MOTION = "keypoints"
 
+    def __init__(self, config, geometry):
+        super().__init__(config, geometry)
+        self._held: list[tuple] = []  # (keypoints, their floor points, which reach the floor), the latest used last
+
+    def _on_floor(self, keypoints) -> tuple[np.ndarray, np.ndarray]:
+        """Every one of ``keypoints`` on the floor of base_link (N, 2) metres, and which reach it (N,)."""
+        for held in self._held:
+            if held[0] is keypoints:
+                self._held = [other for other in self._held if other is not held] + [held]
+                return held[1:]
+        held = (keypoints, *self.geometry.on_floor(keypoints.points))
+        self._held = [*self._held[-1:], held]
+        return held[1:]
+
     def increment(self, matches, dt: float) -> tuple[np.ndarray | None, str | None]:
         parameters = self.config.features
-        start, end, on_floor = self.geometry.on_floor(*matches.matched)  # every match once, kept or not
+        (start, seen_start), (end, seen_end) = self._on_floor(matches.previous), self._on_floor(matches.current)
+        first, second = matches.pairs.T  # every match once, kept or not
+        start, end, on_floor = start[first], end[second], seen_start[first] & seen_end[second]
         kept = matches.kept & on_floor
         if kept.sum() < parameters.min_matches or degenerate(matches.start):
             return None, f"degenerate: {kept.sum()} kept matches on the floor, (nearly) on one line"

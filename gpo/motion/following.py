@@ -1,0 +1,172 @@
+"""Keypoints detected on keyframes and followed between them by pyramidal Lucas-Kanade (``FeatureParameters.follow``
+``lk``): the floor feature odometer at a fraction of its cost.
+
+The second paper detects and describes keypoints in every frame and matches them with the previous frame's
+(``gpo.motion.keypoints.FeatureTracker``); SIFT's detection is most of a frame's time. Between two frames the floor
+moves a few tens of pixels and turns a degree or two, which Lucas-Kanade follows for far less. So here a keyframe's
+keypoints are detected and described once (``gpo.motion.keypoints.detect``) and followed from frame to frame by
+``cv2.calcOpticalFlowPyrLK`` with the config's ``klt`` window, pyramid and stopping rule: each search starts where
+the last frame's motion predicts, and a keypoint is followed on while tracking it back from the new frame returns
+within ``forward_backward_px`` of where it was. Each frame is measured against the keyframe: the pairs (a keypoint
+in the keyframe, where it was followed to) go through the paper's histogram filter and invariance check
+(``gpo.motion.keypoints.filtered``) to the rigid fit, as matches do.
+
+The keyframe is kept as ``FeatureParameters.keyframe`` says, as with matching: while a frame keeps at least
+``min_overlap`` of the pairs its first frame kept, for at most ``max_frames`` frames. The frame that ends it becomes
+the new keyframe, and its keypoints are detected then. When the followed keypoints cannot measure a frame (too few
+followed or kept: a blurred frame, a jump beyond the pyramid's reach), the frame's keypoints, detected for the new
+keyframe, are matched with the keyframe's descriptors and filtered, as the paper does every frame: matching happens
+only when it is needed.
+
+Lucas-Kanade assumes that a patch keeps its brightness, which the exposure's flicker and the vignetting break: each
+frame is levelled first as the floor image's KLT flow levels it (``prepare``, a ``FollowFrame``; it depends on the
+frame alone). Pixels (u, v): u right, v down, as OpenCV; points are pixel centres of the full image.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from gpo.motion.keypoints import FeatureMatches, FeatureParameters, Keypoints, detect, filtered, matched, timed
+from gpo.motion.klt import KLTParameters, levelled
+from gpo.motion.median import median_of
+
+
+@dataclass(frozen=True, eq=False)
+class FollowFrame:
+    """A frame made ready to follow keypoints into (``KeypointFollower.prepare``): the grey ``image`` (H, W) uint8,
+    where a keyframe's keypoints are detected, and the image Lucas-Kanade searches, ``levelled`` (H, W) uint8: as the
+    floor image's KLT flow sees it (``gpo.motion.klt.levelled``), divided by its local mean (``klt.flat_field_px``)
+    and scaled to one mean and contrast, so that neither the exposure's flicker from frame to frame nor the
+    vignetting fixed to the camera pulls the searches."""
+
+    image: np.ndarray
+    levelled: np.ndarray
+
+
+class KeypointFollower:
+    """Keypoints detected on keyframes and followed between them by pyramidal Lucas-Kanade (see the module).
+
+    ``parameters``: the keypoints, the filters and the keyframe policy; ``klt``: Lucas-Kanade's window, pyramid,
+    stopping rule and forward-backward check (``window_px``, ``pyramid_levels``, ``max_iterations``,
+    ``epsilon_px``, ``forward_backward_px``); ``mask`` (H, W), optional: nonzero where the image may be used, for
+    the detection (``detect``) and the followed keypoints alike. ``track(frame)`` returns the frame's
+    ``FeatureMatches`` against the keyframe (None for the first frame); ``restart()`` forgets the frames before. The
+    invariance check draws from one generator, ``np.random.default_rng(parameters.seed)``: the same frames give the
+    same matches."""
+
+    def __init__(self, parameters: FeatureParameters, klt: KLTParameters | None = None, mask=None):
+        self.parameters = parameters
+        self.klt = klt if klt is not None else KLTParameters()
+        self._mask = None if mask is None else np.asarray(mask).astype(bool)
+        self._valid = None if mask is None else self._mask.astype(np.uint8)
+        self._rng = np.random.default_rng(parameters.seed)
+        self.restart()
+
+    def restart(self) -> None:
+        """Forget the frames before: the next ``track`` call starts afresh."""
+        self._keyframe: Keypoints | None = None
+        self._followed = np.zeros(0, int)  # the keyframe's keypoints still followed, by index
+        self._last = np.zeros((0, 2), np.float32)  # where they were in the latest frame, pixels
+        self._latest: np.ndarray | None = None  # the latest frame, levelled
+        self._velocity: np.ndarray | None = None  # the latest frame's median motion, pixels a second
+        self._time_s = 0.0
+        self._frames = 0  # frames measured against the keyframe so far
+
+    @property
+    def keyframe_is_latest(self) -> bool:
+        """Whether the next frame is measured from the latest one (the latest frame is the keyframe)."""
+        return self._frames == 0
+
+    def prepare(self, image: np.ndarray) -> FollowFrame:
+        """``image`` (H, W) uint8 made ready to follow keypoints into (``FollowFrame``), levelled as ``klt`` says
+        (``normalise_brightness``, ``flat_field_px``). It depends on the frame alone, so frames can be prepared ahead,
+        in another thread, while earlier ones are followed."""
+        p = self.klt
+        if not p.normalise_brightness:
+            return FollowFrame(image, image)
+        level = image.astype(np.float32)
+        local_mean = cv2.blur(level, (p.flat_field_px, p.flat_field_px)) if p.flat_field_px else None
+        return FollowFrame(image, levelled(level, local_mean, self._valid))
+
+    def track(self, frame: FollowFrame | np.ndarray, time_s: float | None = None) -> FeatureMatches | None:
+        """The pairs from the keyframe's keypoints to ``frame`` (an image (H, W) uint8, or what ``prepare`` made of
+        one), filtered; None for the first frame. ``time_s``: the frame's time in seconds, so that the predicted
+        motion scales with the time since the previous frame (a dropped frame doubles it); None counts frames."""
+        if not isinstance(frame, FollowFrame):
+            frame = self.prepare(frame)
+        elapsed = 1.0 if time_s is None or self._keyframe is None else time_s - self._time_s
+        self._time_s = 0.0 if time_s is None else time_s
+        seconds: dict = {}
+        if self._keyframe is None:
+            self._new_keyframe(frame, seconds)
+            return None
+        keyframe = self._keyframe
+        current, pairs, moved = timed(seconds, "follow", self._follow, frame, elapsed)
+        flag = _too_few(len(pairs), keyframe, self.parameters)
+        measured = filtered(keyframe, current, pairs, self.parameters, self._rng, seconds, flag)
+        self._velocity = None if measured.flag is not None else (median_of(moved, axis=0) / elapsed).astype(np.float32)
+        frames = self._frames + 1
+        if measured.flag is None and self.parameters.keyframe.keeps(len(pairs), len(keyframe), frames):
+            self._frames, self._latest = frames, frame.levelled
+            self._followed, self._last = pairs[:, 0], current.points.astype(np.float32)
+            return measured
+        detected = self._new_keyframe(frame, seconds)
+        if measured.flag is not None:  # the followed keypoints cannot measure it: the keyframe's matched instead
+            measured = matched(keyframe, detected, self.parameters, self._rng, seconds)
+        return measured
+
+    def _follow(self, frame: FollowFrame, elapsed: float) -> tuple[Keypoints, np.ndarray, np.ndarray]:
+        """The keyframe's followed keypoints searched for in ``frame``, ``elapsed`` (seconds, or frames) after the
+        latest frame, each search starting where the latest frame's motion predicts: the keypoints where they were
+        found (with the keyframe's descriptors and sizes), the pairs (M, 2) (keyframe index, index among them) and
+        each one's motion since the latest frame (M, 2), pixels."""
+        p = self.klt
+        start = self._last.reshape(-1, 1, 2)
+        predicted = self._velocity is not None
+        shift = (self._velocity * elapsed).astype(np.float32) if predicted else np.zeros(2, np.float32)
+        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, p.max_iterations, p.epsilon_px)
+        lk = {"winSize": (p.window_px, p.window_px), "criteria": criteria, "flags": cv2.OPTFLOW_USE_INITIAL_FLOW}
+        end, status, _ = cv2.calcOpticalFlowPyrLK(
+            self._latest, frame.levelled, start, start + shift, maxLevel=p.pyramid_levels, **lk
+        )
+        back, back_status, _ = cv2.calcOpticalFlowPyrLK(  # once the motion is known, a right track is near its start
+            frame.levelled, self._latest, end, end - shift, maxLevel=0 if predicted else p.pyramid_levels, **lk
+        )
+        start, end, back = start.reshape(-1, 2), end.reshape(-1, 2), back.reshape(-1, 2)
+        keep = (status.ravel() == 1) & (back_status.ravel() == 1)
+        keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2
+        keep &= self._inside(end, frame.image.shape)
+        followed, keyframe = self._followed[keep], self._keyframe
+        current = Keypoints(end[keep].astype(float), keyframe.descriptors[followed], keyframe.sizes[followed])
+        return current, np.column_stack([followed, np.arange(len(followed))]), end[keep] - start[keep]
+
+    def _inside(self, points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+        """Which ``points`` (N, 2) have their whole Lucas-Kanade window inside the image (H, W) and lie on a usable
+        pixel of the mask."""
+        half = self.klt.window_px // 2
+        height, width = shape
+        inside = (points >= half).all(axis=1) & (points[:, 0] <= width - 1 - half) & (points[:, 1] <= height - 1 - half)
+        if self._mask is not None:
+            u, v = np.rint(points[inside]).astype(int).T
+            inside[inside] = self._mask[v, u]
+        return inside
+
+    def _new_keyframe(self, frame: FollowFrame, seconds: dict) -> Keypoints:
+        """``frame`` becomes the keyframe: its keypoints detected, all of them followed from here."""
+        keypoints = timed(seconds, "detect", detect, frame.image, self.parameters, self._mask)
+        self._keyframe, self._latest, self._frames = keypoints, frame.levelled, 0
+        self._followed = np.arange(len(keypoints))
+        self._last = keypoints.points.astype(np.float32)
+        return keypoints
+
+
+def _too_few(followed: int, keyframe: Keypoints, parameters: FeatureParameters) -> str | None:
+    """Why ``followed`` keypoints of the ``keyframe`` are too few to filter, or None."""
+    if followed < parameters.min_matches:
+        return (f"too few keypoints followed: {followed} of the keyframe's {len(keyframe)} "
+                f"(at least {parameters.min_matches})")
+    return None
