@@ -5,8 +5,16 @@ import numpy as np
 import pytest
 
 from gpo.motion.klt import TEXTURE_LAG_PX, FloorFlow, FlowError, KLTParameters, floor_texture
-from gpo.motion.layers import LAYER_MIN_TRACKS, floor_layer
-from gpo.motion.overview import OverviewShift, disagrees, pulled_short, replaces_median
+from gpo.motion.layers import LAYER_MIN_TRACKS, floor_layer, layered
+from gpo.motion.overview import (
+    ALERT_FRAMES,
+    PROBE_FRAMES,
+    OverviewShift,
+    Schedule,
+    disagrees,
+    pulled_short,
+    replaces_median,
+)
 from gpo.odometry.kinematics import increment_from_point_pairs
 
 
@@ -376,6 +384,62 @@ def test_the_whole_view_replaces_a_median_further_than_it_from_the_predicted_mot
     found = OverviewShift(np.array(shift), peak)
     assert replaces_median(np.array(median), None, found, np.array(predicted), 1.5, 0.3) is replaced
     assert replaces_median(None, "too few tracks kept", found, np.array(predicted), 1.5, 0.3) is (peak >= 0.3)
+
+
+def test_the_whole_view_check_runs_in_every_frame_that_needs_it_and_now_and_then_between():
+    schedule = Schedule()
+    assert all(schedule.due(False) for _ in range(ALERT_FRAMES - 1))  # a new stream starts alert
+    rest = [schedule.due(False) for _ in range(4 * PROBE_FRAMES)]
+    assert rest == ([False] * (PROBE_FRAMES - 1) + [True]) * 4  # at rest, every PROBE_FRAMES-th frame
+    assert schedule.due(True) and schedule.due(True)  # a frame that shows a reason
+    schedule.alert()  # the check changed a frame: every frame again for a while
+    assert all(schedule.due(False) for _ in range(ALERT_FRAMES - 1)) and not schedule.due(False)
+
+
+def test_the_wider_view_is_made_only_in_the_frames_the_check_runs(monkeypatch):
+    """On a floor whose tracks and whole view agree, after the first ALERT_FRAMES frames the check correlates a
+    frame with the one before it every PROBE_FRAMES-th frame: two wider views made each time, none in between, and
+    every frame measured as with the check in every frame."""
+    image = _texture(400)
+    frames = [_moved(image, 2.5 * k, -3.0 * k, centre=(200.0, 200.0)) for k in range(ALERT_FRAMES + 4 * PROBE_FRAMES)]
+    made = []
+
+    def wide_of(k):
+        def make():
+            made.append(k)
+            return cv2.resize(frames[k], (200, 200), interpolation=cv2.INTER_AREA)
+
+        return make
+
+    def measured(flow):
+        return [flow.track(flow.prepare(frame[100:300, 100:300], wide_of(k))) for k, frame in enumerate(frames)][1:]
+
+    scheduled = measured(FloorFlow(KLTParameters()))
+    probes = range(ALERT_FRAMES + PROBE_FRAMES - 1, len(frames), PROBE_FRAMES)
+    assert made == list(range(ALERT_FRAMES)) + [k for probe in probes for k in (probe - 1, probe)]
+    monkeypatch.setattr("gpo.motion.overview.PROBE_FRAMES", 1)  # the check in every frame, as before the schedule
+    for when_due, always in zip(scheduled, measured(FloorFlow(KLTParameters())), strict=True):
+        np.testing.assert_array_equal(when_due.median, always.median)
+        assert when_due.quality == always.quality
+
+
+def test_tracks_that_may_hold_two_layers_are_told_from_one_layer():
+    """A rigid shift of 60 tracks: one layer. A dozen of them moving at 4 % of the others' speed, as a glossy
+    floor's reflections do, or all but a dozen (the reflections then hold the median): two."""
+    rng = np.random.default_rng(5)
+    floor = np.tile([3.0, -8.0], (60, 1)) + rng.normal(0.0, 0.1, (60, 2))
+    assert not layered(floor)
+    reflections = np.arange(60)[:, None] < 12
+    assert layered(np.where(reflections, 0.04 * floor, floor)) and layered(np.where(reflections, floor, 0.04 * floor))
+    assert not layered(np.where(reflections, 0.04 * floor, floor)[: 2 * LAYER_MIN_TRACKS - 1])  # too few tracks
+
+
+@pytest.mark.parametrize("floor, reflections", [(20, 60), (40, 40), (60, 20)])
+@pytest.mark.parametrize("turn_deg, shift_px", [(0.0, (9.0, 0.0)), (2.5, (-6.0, 1.5)), (-4.0, (0.0, -5.0))])
+def test_wherever_floor_layer_splits_the_tracks_they_are_seen_layered(floor, reflections, turn_deg, shift_px):
+    """``layered`` gates ``floor_layer`` (gpo-exact) and the whole-view check: it must hold wherever a split is."""
+    start, end, _, _ = two_layers(floor, reflections, turn_deg, shift_px, mirror_share=0.06)
+    assert layered(end - start)
 
 
 def test_the_whole_view_check_keeps_tracks_that_agree_with_it():

@@ -31,7 +31,8 @@ import cv2
 import numpy as np
 
 from gpo.motion.keypoints import FeatureMatches, FeatureParameters, Keypoints, detect, filtered, matched, timed
-from gpo.motion.klt import KLTParameters, levelled
+from gpo.motion.klt import KLTParameters
+from gpo.motion.levelling import levelled
 from gpo.motion.median import median_of
 
 
@@ -39,7 +40,7 @@ from gpo.motion.median import median_of
 class FollowFrame:
     """A frame made ready to follow keypoints into (``KeypointFollower.prepare``): the grey ``image`` (H, W) uint8,
     where a keyframe's keypoints are detected, and the image Lucas-Kanade searches, ``levelled`` (H, W) uint8: as the
-    floor image's KLT flow sees it (``gpo.motion.klt.levelled``), divided by its local mean (``klt.flat_field_px``)
+    floor image's KLT flow sees it (``gpo.motion.levelling``), divided by its local mean (``klt.flat_field_px``)
     and scaled to one mean and contrast, so that neither the exposure's flicker from frame to frame nor the
     vignetting fixed to the camera pulls the searches."""
 

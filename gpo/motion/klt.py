@@ -21,45 +21,40 @@ a wrong vector: no texture (no local contrast beyond the sensor's noise, ``floor
 few tracks kept (a bad frame, motion blur), vectors that disagree (no consensus), or a change of motion near the
 pyramid's reach (too fast).
 
-A frame may hold a second, slower layer of vectors (``FlowQuality.slower``): on a glossy floor the reflection of
-the ceiling's lights lies as deep below the floor as the lights are above it, so as the camera (at height h)
-drives, the reflection of lights at height H moves through the floor image at h / (h + H) of the floor's speed,
-a few hundredths. On a screed whose own grain is fainter than those reflections they are much of the texture
-the corners find; they pull the median short and no check above fails. The frame is not flagged for them (the
-median is still the best estimate at hand); the run's summary counts such frames
-(``pipeline.OdometryResult.summary``). ``floor_layer`` tells the floor's own tracks from the reflections' by the
-geometry of the two layers, for the estimators that want the floor alone (``gpo-exact``).
+A frame may hold a second, slower layer of vectors (``FlowQuality.slower``): a glossy floor's reflections of the
+ceiling's lights move through the floor image at a few hundredths of the floor's speed (``gpo.motion.layers``); on
+a screed whose own grain is fainter they are much of the texture the corners find, pull the median short, and no
+check above fails. The frame is not flagged for them (the median is still the best estimate at hand); the run's
+summary counts such frames (``pipeline.OdometryResult.summary``), and the whole-view check
+(``gpo.motion.overview``) and ``floor_layer`` (for ``gpo-exact``) tell the floor's motion from theirs.
 
-Each floor image is first flat-fielded and scaled to a common mean and contrast (exposure flicker and vignetting
-break Lucas-Kanade's constant brightness). Pixels (u, v): u right, v down, as OpenCV.
+Each floor image is first levelled (``gpo.motion.levelling``: exposure flicker and vignetting break Lucas-Kanade's
+constant brightness). Pixels (u, v): u right, v down, as OpenCV.
 """
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
 
 from gpo.motion.keyframes import FRAME_TO_FRAME, KeyframePolicy
-from gpo.motion.layers import slower_count, slower_layer
+from gpo.motion.layers import layered, slower_count, slower_layer
+from gpo.motion.levelling import levelled
 from gpo.motion.median import median_of
-from gpo.motion.overview import Overview, OverviewShift, disagrees, replaces_median
+from gpo.motion.overview import Overview, OverviewShift, Schedule, disagrees, replaces_median
 from gpo.motion.ranges import check_rules, in_range
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
-
-
-GREY_MEAN, GREY_SPREAD = 128.0, 40.0  # every floor image is scaled to this mean and standard deviation
 
 
 CONTRAST_BOX_PX = 41  # the local mean for the texture measure when there is no flat field
 
 
 TEXTURE_LAG_PX = 3  # the texture measure compares the floor image with itself this far away (see floor_texture)
-
-
-STATISTICS_STEP = 2  # image statistics are taken over every second row and column
 
 
 OVERVIEW_GRID = 4  # the whole-view check's measurement: this many by this many points over the image's middle half
@@ -174,7 +169,8 @@ class FlowQuality:
     as reflections; see the module); ``overview``: the frame's motion is the whole-view check's
     (``gpo.motion.overview``), the tracks having disagreed with it; ``disagreed``: the tracks and the whole-view
     check disagreed (``gpo.motion.overview.disagrees``), or the check measured a flagged frame: whichever measured
-    it, the frame's motion is in doubt (the fused route does not fuse it, ``gpo.fusion.streaming``).
+    it, the frame's motion is in doubt (the fused route does not fuse it, ``gpo.fusion.streaming``); ``layers``: the
+    kept tracks since the keyframe may move in two layers (``gpo.motion.layers.layered``).
     """
 
     tracked: int
@@ -185,6 +181,7 @@ class FlowQuality:
     slower: int = 0
     overview: bool = False
     disagreed: bool = False
+    layers: bool = False
 
     @property
     def ok(self) -> bool:
@@ -240,11 +237,18 @@ class FlowMeasurement:
 class FlowFrame:
     """A floor image made ready to track (``FloorFlow.prepare``): flat-fielded and scaled to one mean and contrast
     (``image``, uint8), with its local contrast beyond noise (``texture``, grey levels; ``floor_texture``) and the
-    wider view the whole-view check correlates (``overview``, float32, or None)."""
+    wider view the whole-view check correlates (``wide``: the view, or what makes it; None without the check), made
+    when first read (``overview``): the check runs in the frames that need it (``gpo.motion.overview.Schedule``)."""
 
     image: np.ndarray
     texture: float
-    overview: np.ndarray | None = None
+    wide: np.ndarray | Callable[[], np.ndarray] | None = None
+
+    @functools.cached_property
+    def overview(self) -> np.ndarray | None:
+        """The wider view the whole-view check correlates (float32), or None without the check."""
+        wide = self.wide() if callable(self.wide) else self.wide
+        return None if wide is None else wide.astype(np.float32)
 
 
 @dataclass
@@ -275,12 +279,14 @@ class FloorFlow:
     _valid: np.ndarray | None = field(default=None, init=False, repr=False)
     _size: tuple[int, int] | None = field(default=None, init=False, repr=False)
     _overview: Overview | None = field(default=None, init=False, repr=False)
+    _schedule: Schedule = field(default_factory=Schedule, init=False, repr=False)  # when the whole-view check runs
+    _view: FlowFrame | None = field(default=None, init=False, repr=False)  # the latest frame, for its wider view
     _wary: bool = field(default=False, init=False, repr=False)  # the last frame's tracks and whole view disagreed
 
     def restart(self) -> None:
         """Forget the previous frame: the next ``track`` call starts afresh."""
         self._image, self._points, self._last, self._frames = None, None, None, 0
-        self._overview, self._wary = None, False
+        self._overview, self._schedule, self._view, self._wary = None, Schedule(), None, False
         self._velocity, self._predicted = np.zeros(2, np.float32), False
 
     @property
@@ -289,13 +295,13 @@ class FloorFlow:
         earlier one."""
         return self._frames == 0
 
-    def prepare(self, image: np.ndarray, overview: np.ndarray | None = None) -> FlowFrame:
-        """``image`` (H, W) uint8 made ready to track (``FlowFrame``), with the wider ``overview`` of the same frame
-        when the whole-view check runs (``KLTParameters.overview_scale``). It depends on the frame alone, so frames
-        can be prepared ahead, in another thread, while earlier ones are tracked."""
+    def prepare(self, image: np.ndarray, overview: np.ndarray | Callable[[], np.ndarray] | None = None) -> FlowFrame:
+        """``image`` (H, W) uint8 made ready to track (``FlowFrame``), with the wider ``overview`` of the same frame (or
+        what makes it, called when the check needs it) when the whole-view check runs
+        (``KLTParameters.overview_scale``). It depends on the frame alone, so frames can be prepared ahead, in another
+        thread, while earlier ones are tracked."""
         self._check(image)
-        wide = None if overview is None else overview.astype(np.float32)
-        return FlowFrame(*self._normalised(image), wide)
+        return FlowFrame(*self._normalised(image), overview)
 
     def track(self, image: np.ndarray | FlowFrame, time_s: float | None = None) -> FlowMeasurement | None:
         """The motion from the keyframe (the previous frame, frame-to-frame) to ``image`` (H, W) uint8, or to the
@@ -313,8 +319,8 @@ class FloorFlow:
             self._check(image.image)  # it may come from another tracker's ``prepare``
         else:
             image = self.prepare(image)
-        found = self._observe(image.overview)
-        image, texture = image.image, image.texture
+        previous_view, self._view = self._view, image
+        view, image, texture = image, image.image, image.texture
         reference, points, last = self._image, self._points, self._last
         elapsed = 1.0 if time_s is None or reference is None else time_s - self._time_s
         self._time_s = 0.0 if time_s is None else time_s
@@ -332,9 +338,12 @@ class FloorFlow:
             points, last = self._points, self._last
         prediction = (self._velocity * elapsed).astype(np.float32)
         measurement, kept, frame_median = self._measure(reference, image, points, last, prediction)
+        found = self._observe(previous_view, view, measurement)
         if found is not None:
             measurement = self._checked(measurement, found, frame_median, prediction, self._wary_tolerance(found))
             self._wary = measurement.quality.disagreed
+            if measurement.quality.disagreed:
+                self._schedule.alert()
         if measurement.quality.overview:  # a translation from the previous frame: the next start from this one
             self._velocity, self._predicted = (measurement.median / elapsed).astype(np.float32), True
             self._new_keyframe(image, texture, self._detect(image), detected=True)
@@ -405,7 +414,8 @@ class FloorFlow:
         spread = MAD_TO_SIGMA * float(median_of(distance))
         inlier = distance <= max(p.inlier_px, 3.0 * spread)
         slower = slower_count(moved, frame_median)
-        quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=slower)
+        layers = layered(vectors)
+        quality = FlowQuality(len(points), len(start), int(inlier.sum()), spread, slower=slower, layers=layers)
         flag = None
         change = np.hypot(*median_of(found, axis=0))
         if quality.inlier_ratio < p.min_inlier_ratio:
@@ -418,13 +428,19 @@ class FloorFlow:
         measurement = FlowMeasurement(start, end, median, vectors.mean(axis=0), inlier, quality)
         return measurement, keep, frame_median
 
-    def _observe(self, view: np.ndarray | None) -> OverviewShift | None:
-        """The whole-view check's shift into this frame's wider ``view`` (``gpo.motion.overview``), or None."""
-        if view is None:
+    def _observe(self, previous: FlowFrame | None, frame: FlowFrame, measured: FlowMeasurement) -> OverviewShift | None:
+        """The whole-view check's shift from the ``previous`` frame's wider view to ``frame``'s
+        (``gpo.motion.overview``), or None: no check, no previous frame, or the check not due (``Schedule``: the
+        tracks ``measured`` flagged, the check wary and two layers of tracks each make it due)."""
+        if frame.wide is None or previous is None or previous.wide is None:
             return None
+        needed = measured.flag is not None or self._wary or measured.quality.layers
+        if not self._schedule.due(needed):
+            return None
+        before, view = previous.overview, frame.overview
         if self._overview is None:
             self._overview = Overview(self.parameters.overview_scale, view.shape[::-1])
-        return self._overview.observe(view)
+        return self._overview.shift(before, view)
 
     def _wary_tolerance(self, found: OverviewShift) -> float | None:
         """After a frame in doubt, how far (floor-image pixels) the tracks' median may lie from the overview's shift
@@ -469,14 +485,9 @@ class FloorFlow:
             raise FlowError(f"floor image size changed from {self._size} to {size} (width, height)")
 
     def _normalised(self, image: np.ndarray) -> tuple[np.ndarray, float]:
-        """``image`` divided by its local mean (a flat field) and scaled to one mean and contrast over the mask, and
-        its local contrast beyond noise in grey levels (``floor_texture``).
-
-        Lucas-Kanade assumes constant brightness. A few per cent of exposure flicker on a low-contrast floor pulls
-        every track off, and a brightness gradient fixed to the camera (vignetting, the robot's own light) pulls
-        each track towards standing still by an amount that varies across the image: on the simulated T265 rig
-        it turned the rigid fit's rotations 1 % short, which the flat field removes.
-        """
+        """``image`` levelled over the mask (``gpo.motion.levelling``: on the simulated T265 rig the vignetting turned
+        the rigid fit's rotations 1 % short, which the flat field removes), and its local contrast beyond noise in
+        grey levels (``floor_texture``)."""
         size = self.parameters.flat_field_px or CONTRAST_BOX_PX
         floor = image.astype(np.float32)
         local_mean = cv2.blur(floor, (size, size))
@@ -556,19 +567,6 @@ class _Turn:
     def from_view(self, pixels: np.ndarray) -> np.ndarray:
         """The view's ``pixels`` (N, 2) where the image has them."""
         return ((pixels - self.centre) @ self._rotation.T + self.centre).astype(np.float32)
-
-
-def levelled(image: np.ndarray, local_mean: np.ndarray | None = None, valid: np.ndarray | None = None) -> np.ndarray:
-    """``image`` (H, W) float32 divided by its ``local_mean`` (H, W) float32 (a flat field; None: not) and scaled to
-    the mean ``GREY_MEAN`` and the standard deviation ``GREY_SPREAD`` over the pixels ``valid`` (uint8, nonzero; None:
-    all), as uint8: the brightness Lucas-Kanade sees, whatever the exposure (``FloorFlow._normalised``)."""
-    sample = np.s_[::STATISTICS_STEP, ::STATISTICS_STEP]  # a quarter of the pixels: plenty for mean and spread
-    mask = None if valid is None else valid[sample]
-    if local_mean is not None:
-        image = cv2.divide(image, local_mean)  # where the local mean is 0, so is the image: 0
-    mean, spread = (float(v[0, 0]) for v in cv2.meanStdDev(image[sample], mask=mask))
-    gain = GREY_SPREAD / max(spread, 1e-6)
-    return cv2.convertScaleAbs(image, alpha=gain, beta=GREY_MEAN - gain * mean)
 
 
 def floor_texture(detail: np.ndarray, valid: np.ndarray | None = None) -> float:

@@ -40,8 +40,8 @@ class OverviewShift:
 
 
 class Overview:
-    """Phase correlation between consecutive views of ``size`` (width, height) pixels, each ``scale`` times the floor
-    image's pixel."""
+    """Phase correlation between views of ``size`` (width, height) pixels, each ``scale`` times the floor image's
+    pixel: of two views (``shift``), or of each view with the one before it (``observe``)."""
 
     def __init__(self, scale: float, size: tuple[int, int]):
         self.scale = float(scale)
@@ -49,17 +49,52 @@ class Overview:
         self._previous: np.ndarray | None = None
 
     def observe(self, view: np.ndarray) -> OverviewShift | None:
-        """The floor's shift from the previous view to ``view`` (float32, (height, width)), or None for the first.
+        """The floor's shift from the previous view to ``view`` (float32, (height, width)), or None for the first."""
+        previous, self._previous = self._previous, view
+        return None if previous is None else self.shift(previous, view)
+
+    def shift(self, previous: np.ndarray, view: np.ndarray) -> OverviewShift:
+        """The floor's shift from the view ``previous`` to ``view`` (float32, (height, width) each).
 
         The whole views are correlated, reflections and all: taking out what stands still (a running mean of the
         views) removes the reflections' own correlation peak near no motion, but at a slow crawl it removes much of
         the floor too, and on the simulated matte floors it then disagreed with right tracks (the sample's final
         error 0.023 % became 0.110 %)."""
-        previous, self._previous = self._previous, view
-        if previous is None:
-            return None
         (du, dv), peak = cv2.phaseCorrelate(previous, view, self._window)
         return OverviewShift(self.scale * np.array([du, dv]), float(peak))
+
+
+PROBE_FRAMES = 4  # at rest the whole view is correlated every this many frames ...
+ALERT_FRAMES = 30  # ... and in every frame for this many after it last changed a frame's motion or its doubt
+
+
+class Schedule:
+    """When the whole-view check runs: in every frame that needs it, and between those only now and then.
+
+    On a matte floor the check confirms the tracks and changes nothing; its correlation and the wider view it reads
+    are most of what a frame costs beyond reading it, remapping it and following its tracks. So it runs in a frame
+    that shows a reason for it (``due(needed)``: the flow flagged, the check wary, or the tracks in two layers,
+    ``gpo.motion.layers.layered``), in every frame for ``ALERT_FRAMES`` after it last changed a frame's motion or
+    put it in doubt (``alert``: a glossy floor's reflections keep it busy), and at rest every ``PROBE_FRAMES``-th
+    frame, so that reflections the tracks have locked onto unseen are found within that many frames. A new stream
+    starts alert, so that tracks locked onto reflections from the first frame are caught."""
+
+    def __init__(self):
+        self._since = 0  # frames since the check last ran
+        self._alert = ALERT_FRAMES  # frames it still runs in whatever they show
+
+    def due(self, needed: bool) -> bool:
+        """Whether the check runs in the next frame, ``needed`` saying whether the frame shows a reason for it."""
+        self._since += 1
+        self._alert = max(self._alert - 1, 0)
+        if not (needed or self._alert or self._since >= PROBE_FRAMES):
+            return False
+        self._since = 0
+        return True
+
+    def alert(self) -> None:
+        """The check changed a frame's motion or put it in doubt: it runs in every frame for a while."""
+        self._alert = ALERT_FRAMES
 
 
 def pulled_short(median: np.ndarray, shift_px: np.ndarray, tolerance_px: float) -> bool:

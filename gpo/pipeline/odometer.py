@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from enum import StrEnum
@@ -242,8 +243,8 @@ class FloorOdometer:
             return self.motion.prepare(self.floor_image(image))
         if self.estimator.MOTION == "keypoints":
             return self.keypoints(image)
-        overview = None if self._overview_table is None else self._overview_table.apply(image)
-        return self.motion.prepare(self.floor_image(image), overview)
+        wide = None if self._overview_table is None else functools.partial(self._overview_table.apply, image)
+        return self.motion.prepare(self.floor_image(image), wide)  # the wider view made when the check needs it
 
     def step(self, stamp_ns: int, image: np.ndarray | FlowFrame | Keypoints | FollowFrame | Unreadable) -> FrameRecord:
         """Take one camera frame (H, W) in stamp order, or what ``prepare`` made of it; return its record. A frame that

@@ -2,7 +2,8 @@
 does not slide at its rear axle (reverse driving and turning on the spot included).
 
 On a glossy floor the tracks of the ceiling lights' reflections move slower than the floor's; only the floor's own
-layer counts (``gpo.motion.layers.floor_layer``).
+layer counts (``gpo.motion.layers.floor_layer``), looked for where the tracks may move in two layers
+(``gpo.motion.klt.FlowQuality.layers``).
 
 The tracks start in a keyframe (``KEYFRAMES``): the arc spans the frames since it. Where the robot's curvature changes
 within those frames, the one arc through the measured point's motion is an approximation; at the keyframe policy's
@@ -26,6 +27,8 @@ class ExactArc(FloorEstimator):
     OVERVIEW = True
 
     def increment(self, measurement, dt: float) -> tuple[np.ndarray | None, str | None]:
-        floor = floor_layer(measurement.start, measurement.end, self.geometry.nadir_px)
+        floor = None  # every track: one layer
+        if measurement.quality.layers:
+            floor = floor_layer(measurement.start, measurement.end, self.geometry.nadir_px)
         where, moved = vector_motion(measurement, self.geometry, self.config.vector, floor)
         return increment_from_point_motion(where, where + moved), None
