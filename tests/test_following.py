@@ -40,9 +40,9 @@ def _follower(**keyframe) -> KeypointFollower:
 
 def test_followed_keypoints_land_where_the_floor_took_them():
     """Eight frames, each turned 0.8 degrees and shifted (3, -2) px more than the one before, all measured against
-    the first: the kept pairs move as the known motion moves the floor, and nothing is detected again. Each
-    keypoint is followed from frame to frame, so its small errors add up: measured 0.04 px off in the first frame,
-    0.18 px in the eighth (median), the pairs' rigid fit turned 0.5 % short of the 6.4 degrees."""
+    the first: the kept pairs move as the known motion moves the floor, and nothing is detected again. Each frame is
+    searched from the keyframe, so its errors are its own: measured 0.03-0.06 px (median) in every frame, the pairs'
+    rigid fit turned 0.1 % short of the 6.4 degrees."""
     image = _floor()
     follower = _follower()
     assert follower.track(image) is None
@@ -56,9 +56,9 @@ def test_followed_keypoints_land_where_the_floor_took_them():
         assert set(measured.seconds) == {"follow", "histogram", "invariance"}  # followed, not detected
         expected = measured.start @ matrix[:, :2].T + matrix[:, 2]
         error = np.hypot(*(measured.end - expected).T)
-        assert np.median(error) < 0.03 * k + 0.02 and measured.kept.sum() >= 50
+        assert np.median(error) < 0.1 and error.max() < 0.5 and measured.kept.sum() >= 50
     angle, _ = rigid_fit(measured.start, measured.end)
-    assert angle == pytest.approx(-np.radians(6.4), rel=0.01)
+    assert angle == pytest.approx(-np.radians(6.4), rel=0.005)
 
 
 def test_a_keyframe_half_out_of_view_gives_way_to_the_latest_frame():
@@ -82,17 +82,19 @@ def test_a_keyframe_half_out_of_view_gives_way_to_the_latest_frame():
 
 
 def test_a_frame_beyond_the_pyramids_reach_is_matched_with_the_keyframe_instead():
-    """After three frames of 3 px, a jump of 110 px: no search started from the predicted 3 px reaches it, so the
-    frame's keypoints, detected for the new keyframe, are matched with the keyframe's descriptors."""
+    """After three frames of 3 px, a jump of 160 px, twice the pyramid's reach: no search started from the predicted
+    motion finds it, so the frame's keypoints, detected for the new keyframe, are matched with the keyframe's
+    descriptors."""
     floor = _floor(2, (WIDTH + 200, HEIGHT))
-    offsets = [0, 3, 6, 9, 119]
+    offsets = [0, 3, 6, 9, 169]
     follower = _follower()
     assert follower.track(floor[:, :WIDTH]) is None
     measured = [follower.track(floor[:, offset : offset + WIDTH]) for offset in offsets[1:]]
+    assert not any("match" in m.seconds for m in measured[:-1])
     jump = measured[-1]
     assert "match" in jump.seconds and "detect" in jump.seconds and follower.keyframe_is_latest
     assert jump.flag is None
-    np.testing.assert_allclose(np.median(jump.end - jump.start, axis=0), [-119.0, 0.0], atol=0.5)  # ORB's points
+    np.testing.assert_allclose(np.median(jump.end - jump.start, axis=0), [-169.0, 0.0], atol=0.5)  # ORB's points
 
 
 def test_a_prepared_frame_is_followed_as_its_image_and_restart_forgets_the_frames_before():

@@ -4,19 +4,21 @@
 The second paper detects and describes keypoints in every frame and matches them with the previous frame's
 (``gpo.motion.keypoints.FeatureTracker``); SIFT's detection is most of a frame's time. Between two frames the floor
 moves a few tens of pixels and turns a degree or two, which Lucas-Kanade follows for far less. So here a keyframe's
-keypoints are detected and described once (``gpo.motion.keypoints.detect``) and followed from frame to frame by
-``cv2.calcOpticalFlowPyrLK`` with the config's ``klt`` window, pyramid and stopping rule: each search starts where
-the last frame's motion predicts, and a keypoint is followed on while tracking it back from the new frame returns
-within ``forward_backward_px`` of where it was. Each frame is measured against the keyframe: the pairs (a keypoint
-in the keyframe, where it was followed to) go through the paper's histogram filter and invariance check
+keypoints are detected and described once (``gpo.motion.keypoints.detect``), and in each later frame the window
+about each of them in the keyframe is searched for by ``cv2.calcOpticalFlowPyrLK`` with the config's ``klt``
+window, pyramid and stopping rule: from the keyframe's image, so that each frame's errors are its own, starting
+where the keypoint was in the latest frame moved by that frame's motion, in a view turned back onto the keyframe
+once the floor has turned (``gpo.motion.turned_view``); a keypoint is followed on while searching back from the
+frame returns within ``forward_backward_px`` of it. Each frame is measured against the keyframe: the pairs (a
+keypoint in the keyframe, where it was found) go through the paper's histogram filter and invariance check
 (``gpo.motion.keypoints.filtered``) to the rigid fit, as matches do.
 
-The keyframe is kept as ``FeatureParameters.keyframe`` says, as with matching: while a frame keeps at least
-``min_overlap`` of the pairs its first frame kept, for at most ``max_frames`` frames. The frame that ends it becomes
-the new keyframe, and its keypoints are detected then. When the followed keypoints cannot measure a frame (too few
-followed or kept: a blurred frame, a jump beyond the pyramid's reach), the frame's keypoints, detected for the new
-keyframe, are matched with the keyframe's descriptors and filtered, as the paper does every frame: matching happens
-only when it is needed.
+The keyframe is kept as ``FeatureParameters.keyframe`` says: while at least ``min_overlap`` of its keypoints are
+still followed, for at most ``max_frames`` frames. The frame that ends it becomes the new keyframe, and its
+keypoints are detected then. When the followed keypoints cannot measure a frame (too few followed or kept: a
+blurred frame, a jump beyond the pyramid's reach), the frame's keypoints, detected for the new keyframe, are matched
+with the keyframe's descriptors and filtered, as the paper does every frame: matching happens only when it is
+needed.
 
 Lucas-Kanade assumes that a patch keeps its brightness, which the exposure's flicker and the vignetting break: each
 frame is levelled first as the floor image's KLT flow levels it (``prepare``, a ``FollowFrame``; it depends on the
@@ -34,6 +36,7 @@ from gpo.motion.keypoints import FeatureMatches, FeatureParameters, Keypoints, d
 from gpo.motion.klt import KLTParameters
 from gpo.motion.levelling import levelled
 from gpo.motion.median import median_of
+from gpo.motion.turned_view import TurnedView
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,8 +56,9 @@ class KeypointFollower:
 
     ``parameters``: the keypoints, the filters and the keyframe policy; ``klt``: Lucas-Kanade's window, pyramid,
     stopping rule and forward-backward check (``window_px``, ``pyramid_levels``, ``max_iterations``,
-    ``epsilon_px``, ``forward_backward_px``); ``mask`` (H, W), optional: nonzero where the image may be used, for
-    the detection (``detect``) and the followed keypoints alike. ``track(frame)`` returns the frame's
+    ``epsilon_px``, ``forward_backward_px``), the share of the searches that must pass it (``min_kept_ratio``) and
+    the levelling (``normalise_brightness``, ``flat_field_px``); ``mask`` (H, W), optional: nonzero where the image
+    may be used, for the detection (``detect``) and the followed keypoints alike. ``track(frame)`` returns the frame's
     ``FeatureMatches`` against the keyframe (None for the first frame); ``restart()`` forgets the frames before. The
     invariance check draws from one generator, ``np.random.default_rng(parameters.seed)``: the same frames give the
     same matches."""
@@ -72,7 +76,7 @@ class KeypointFollower:
         self._keyframe: Keypoints | None = None
         self._followed = np.zeros(0, int)  # the keyframe's keypoints still followed, by index
         self._last = np.zeros((0, 2), np.float32)  # where they were in the latest frame, pixels
-        self._latest: np.ndarray | None = None  # the latest frame, levelled
+        self._image: np.ndarray | None = None  # the keyframe, levelled
         self._velocity: np.ndarray | None = None  # the latest frame's median motion, pixels a second
         self._time_s = 0.0
         self._frames = 0  # frames measured against the keyframe so far
@@ -105,15 +109,14 @@ class KeypointFollower:
         if self._keyframe is None:
             self._new_keyframe(frame, seconds)
             return None
-        keyframe = self._keyframe
+        keyframe, searched = self._keyframe, len(self._followed)
         current, pairs, moved = timed(seconds, "follow", self._follow, frame, elapsed)
-        flag = _too_few(len(pairs), keyframe, self.parameters)
+        flag = _too_few(len(pairs), searched, self.parameters.min_matches, self.klt.min_kept_ratio)
         measured = filtered(keyframe, current, pairs, self.parameters, self._rng, seconds, flag)
         self._velocity = None if measured.flag is not None else (median_of(moved, axis=0) / elapsed).astype(np.float32)
         frames = self._frames + 1
         if measured.flag is None and self.parameters.keyframe.keeps(len(pairs), len(keyframe), frames):
-            self._frames, self._latest = frames, frame.levelled
-            self._followed, self._last = pairs[:, 0], current.points.astype(np.float32)
+            self._frames, self._followed, self._last = frames, pairs[:, 0], current.points.astype(np.float32)
             return measured
         detected = self._new_keyframe(frame, seconds)
         if measured.flag is not None:  # the followed keypoints cannot measure it: the keyframe's matched instead
@@ -122,28 +125,41 @@ class KeypointFollower:
 
     def _follow(self, frame: FollowFrame, elapsed: float) -> tuple[Keypoints, np.ndarray, np.ndarray]:
         """The keyframe's followed keypoints searched for in ``frame``, ``elapsed`` (seconds, or frames) after the
-        latest frame, each search starting where the latest frame's motion predicts: the keypoints where they were
-        found (with the keyframe's descriptors and sizes), the pairs (M, 2) (keyframe index, index among them) and
-        each one's motion since the latest frame (M, 2), pixels."""
+        latest frame: the keypoints where they were found (with the keyframe's descriptors and sizes), the pairs
+        (M, 2) (keyframe index, index among them) and each one's motion since the latest frame (M, 2), pixels.
+
+        Each keypoint's window is searched for from the keyframe's image, not the latest frame's, so that a
+        search's small error is made once, not added up frame after frame (a chain of searches turned a path's
+        heading 0.3-1.2 degrees where the keyframe's turned it 0.1-0.3 on draws of the population), starting where
+        the keypoint was in the latest frame moved by the latest frame's motion; a frame turned from the keyframe is
+        searched in a view turned back (``gpo.motion.turned_view``). Once the motion is known, the search back to
+        the keyframe runs on the full-resolution image only: a right track is then near its start."""
         p = self.klt
-        start = self._last.reshape(-1, 1, 2)
-        predicted = self._velocity is not None
-        shift = (self._velocity * elapsed).astype(np.float32) if predicted else np.zeros(2, np.float32)
+        keyframe, followed = self._keyframe, self._followed
+        if not len(followed):
+            return Keypoints(np.zeros((0, 2)), keyframe.descriptors[:0], np.zeros(0)), np.zeros((0, 2), int), \
+                np.zeros((0, 2))
+        start = keyframe.points[followed].astype(np.float32)
+        shift = np.zeros(2, np.float32) if self._velocity is None else (self._velocity * elapsed).astype(np.float32)
+        guess, image = self._last + shift, frame.levelled
+        turn = TurnedView.between(start, guess, image.shape)
+        if turn is not None:
+            image, guess = turn.view(image), turn.to_view(guess)
         criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, p.max_iterations, p.epsilon_px)
         lk = {"winSize": (p.window_px, p.window_px), "criteria": criteria, "flags": cv2.OPTFLOW_USE_INITIAL_FLOW}
-        end, status, _ = cv2.calcOpticalFlowPyrLK(
-            self._latest, frame.levelled, start, start + shift, maxLevel=p.pyramid_levels, **lk
-        )
-        back, back_status, _ = cv2.calcOpticalFlowPyrLK(  # once the motion is known, a right track is near its start
-            frame.levelled, self._latest, end, end - shift, maxLevel=0 if predicted else p.pyramid_levels, **lk
-        )
+        start, guess = start.reshape(-1, 1, 2), guess.reshape(-1, 1, 2)
+        end, status, _ = cv2.calcOpticalFlowPyrLK(self._image, image, start, guess, maxLevel=p.pyramid_levels, **lk)
+        levels = 0 if self._velocity is not None else p.pyramid_levels
+        back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, self._image, end, start.copy(), maxLevel=levels, **lk)
         start, end, back = start.reshape(-1, 2), end.reshape(-1, 2), back.reshape(-1, 2)
+        if turn is not None:
+            end = turn.from_view(end)
         keep = (status.ravel() == 1) & (back_status.ravel() == 1)
         keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2
         keep &= self._inside(end, frame.image.shape)
-        followed, keyframe = self._followed[keep], self._keyframe
+        followed = followed[keep]
         current = Keypoints(end[keep].astype(float), keyframe.descriptors[followed], keyframe.sizes[followed])
-        return current, np.column_stack([followed, np.arange(len(followed))]), end[keep] - start[keep]
+        return current, np.column_stack([followed, np.arange(len(followed))]), end[keep] - self._last[keep]
 
     def _inside(self, points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
         """Which ``points`` (N, 2) have their whole Lucas-Kanade window inside the image (H, W) and lie on a usable
@@ -159,15 +175,16 @@ class KeypointFollower:
     def _new_keyframe(self, frame: FollowFrame, seconds: dict) -> Keypoints:
         """``frame`` becomes the keyframe: its keypoints detected, all of them followed from here."""
         keypoints = timed(seconds, "detect", detect, frame.image, self.parameters, self._mask)
-        self._keyframe, self._latest, self._frames = keypoints, frame.levelled, 0
+        self._keyframe, self._image, self._frames = keypoints, frame.levelled, 0
         self._followed = np.arange(len(keypoints))
         self._last = keypoints.points.astype(np.float32)
         return keypoints
 
 
-def _too_few(followed: int, keyframe: Keypoints, parameters: FeatureParameters) -> str | None:
-    """Why ``followed`` keypoints of the ``keyframe`` are too few to filter, or None."""
-    if followed < parameters.min_matches:
-        return (f"too few keypoints followed: {followed} of the keyframe's {len(keyframe)} "
-                f"(at least {parameters.min_matches})")
+def _too_few(followed: int, searched: int, min_matches: int, min_kept_ratio: float) -> str | None:
+    """Why ``followed`` keypoints, of the ``searched`` for, are too few to filter, or None: fewer than
+    ``min_matches``, or than ``min_kept_ratio`` of those searched for (a frame where most searches fail is blurred or
+    beyond the pyramid's reach, and the few that pass may have found the wrong place)."""
+    if followed < max(min_matches, min_kept_ratio * searched):
+        return f"too few keypoints followed: {followed} of {searched} (a bad or blurred frame, or too fast)"
     return None

@@ -47,6 +47,7 @@ from gpo.motion.levelling import levelled
 from gpo.motion.median import median_of
 from gpo.motion.overview import Overview, OverviewShift, Schedule, disagrees, replaces_median
 from gpo.motion.ranges import check_rules, in_range
+from gpo.motion.turned_view import TurnedView
 
 MAD_TO_SIGMA = 1.4826  # the median absolute deviation of a normal distribution times this is its sigma
 
@@ -387,7 +388,7 @@ class FloorFlow:
         start = points.reshape(-1, 1, 2)
         shift = ((last - points) + prediction).reshape(-1, 1, 2)
         guess = (start + shift).reshape(-1, 2)  # where each search starts
-        turn = None if self.keyframe.max_frames == 1 else _Turn.between(points, guess, image.shape)
+        turn = None if self.keyframe.max_frames == 1 else TurnedView.between(points, guess, image.shape)
         if turn is not None:  # the frame turned back onto the keyframe, the searches' starts with it
             image = turn.view(image)
             shift = turn.to_view(guess).reshape(-1, 1, 2) - start
@@ -524,49 +525,6 @@ class FloorFlow:
         inside = (u >= 0) & (u < width) & (v >= 0) & (v < height)
         inside[inside] = self._detect_mask[v[inside], u[inside]] > 0
         return inside
-
-
-TURN_VIEW_RAD = np.radians(1.0)  # a frame turned further than this from its keyframe is tracked in a view turned back
-
-
-@dataclass(frozen=True)
-class _Turn:
-    """A frame seen turned back by ``angle`` radians about the image's ``centre`` (u, v) pixels, so that a keyframe's
-    KLT windows, square and unturned, meet the floor as they left it: Lucas-Kanade follows a shift, not a turn, and
-    reads a turn of a few degrees across its windows short."""
-
-    angle: float
-    centre: np.ndarray
-
-    @classmethod
-    def between(cls, points: np.ndarray, moved: np.ndarray, shape: tuple[int, int]) -> _Turn | None:
-        """The turn that takes ``points`` (N, 2) to ``moved`` (N, 2) in an image of ``shape`` (H, W), or None when it is
-        under ``TURN_VIEW_RAD`` (a window then follows the floor well enough)."""
-        a, b = points - points.mean(axis=0), moved - moved.mean(axis=0)
-        angle = float(np.arctan2(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]), np.sum(a * b)))
-        if abs(angle) < TURN_VIEW_RAD:
-            return None
-        return cls(angle, np.array([(shape[1] - 1) / 2, (shape[0] - 1) / 2], np.float32))
-
-    @property
-    def _rotation(self) -> np.ndarray:
-        cos, sin = np.cos(self.angle), np.sin(self.angle)
-        return np.array([[cos, -sin], [sin, cos]], np.float32)
-
-    def view(self, image: np.ndarray) -> np.ndarray:
-        """``image`` turned back: the view's pixel x shows the image's ``from_view(x)`` (bilinear)."""
-        rotation = self._rotation
-        warp = np.hstack([rotation, (self.centre - rotation @ self.centre)[:, None]])
-        flags = cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP
-        return cv2.warpAffine(image, warp, image.shape[::-1], flags=flags, borderMode=cv2.BORDER_REPLICATE)
-
-    def to_view(self, pixels: np.ndarray) -> np.ndarray:
-        """The image's ``pixels`` (N, 2) where the view shows them."""
-        return ((pixels - self.centre) @ self._rotation + self.centre).astype(np.float32)
-
-    def from_view(self, pixels: np.ndarray) -> np.ndarray:
-        """The view's ``pixels`` (N, 2) where the image has them."""
-        return ((pixels - self.centre) @ self._rotation.T + self.centre).astype(np.float32)
 
 
 def floor_texture(detail: np.ndarray, valid: np.ndarray | None = None) -> float:

@@ -7,7 +7,9 @@
 ``step`` runs the config's ``FloorOdometer`` on the frame and returns its ``FrameRecord``. With the method ``fused``
 the floor odometry of ``fusion.floor_method`` and the tracking camera's own odometry go through the same
 ``gpo.fusion.StreamingFusion`` that ``gpo.pipeline.run`` uses on a recording, so a live run and a recorded one give
-the same fused path. A frame's fused pose is settled once the tracking camera has a message after it (at 200 Hz,
+the same fused path. The floor feature odometer following its keypoints between keyframes (``features.follow:
+lk``, ``gpo.motion.following``) does so here as on a recording: a frame costs a Lucas-Kanade search, a keyframe a
+detection. A frame's fused pose is settled once the tracking camera has a message after it (at 200 Hz,
 within 5 ms): each settled ``FusedPose`` goes to ``on_fused`` as it comes, and ``latest`` holds the newest. Nothing
 grows with the run's length.
 
@@ -26,6 +28,7 @@ from scipy.spatial.transform import Rotation
 
 from gpo.fusion import FusedPose, StreamingFusion
 from gpo.io.trajectory import NS_PER_S, Trajectory, base_from_sensor_odometry
+from gpo.motion.following import FollowFrame
 from gpo.motion.keypoints import Keypoints
 from gpo.motion.klt import FlowFrame
 from gpo.pipeline.config import FUSED, OdometryConfig
@@ -79,7 +82,7 @@ class LiveOdometer:
         self._on_fused = on_fused
         self._last_ns: int | None = None  # the stamp of the last message taken, of either stream
 
-    def step(self, stamp_ns: int, image: np.ndarray | FlowFrame | Keypoints | Unreadable) -> FrameRecord:
+    def step(self, stamp_ns: int, image: np.ndarray | FlowFrame | Keypoints | FollowFrame | Unreadable) -> FrameRecord:
         """One camera frame in stamp order: ``stamp_ns`` its header stamp (whole nanoseconds), ``image`` the grey
         frame (H, W) of the calibration's size, 8-bit (16-bit is read as its upper 8 bits), or what
         ``FloorOdometer.prepare`` made of it (``FloorOdometer.refusal`` says what is taken); the floor odometry's
