@@ -22,7 +22,13 @@ import gpo.floor_image.analytic
 from gpo.cameras.mount import detect_corners
 from gpo.cameras.rig import CameraMount
 from gpo.experiments.table1 import reproduce_table1
-from gpo.floor_image.analytic import analytic_points, analytic_table, pixels_to_floor, route_difference
+from gpo.floor_image.analytic import (
+    PixelsOnFloor,
+    analytic_points,
+    analytic_table,
+    pixels_to_floor,
+    route_difference,
+)
 from gpo.floor_image.gpi import front_face_corners, ground_plane_image
 from gpo.floor_image.image import FloorImage, GroundImageError
 from gpo.floor_image.ortho import chessboard_route, ortho_rectify
@@ -391,6 +397,26 @@ def test_floor_points_invert_the_analytic_projection(make_rig):
     assert valid.all()
     truth = floor.pixel_to_base(floor.pixel_centres())[seen]
     np.testing.assert_allclose(points, truth, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("k1k2", [None, (-0.36, 0.10)])  # the shipped lens, the population's strongest barrel
+def test_the_table_of_pixels_on_the_floor_reads_as_each_pixel_followed_down(k1k2):
+    """On a downward camera (the keypoints route's), ``PixelsOnFloor`` interpolates between pixel centres within a
+    few thousandths of a pixel's footprint of ``pixels_to_floor``; a pixel beyond the last centres is followed down
+    itself."""
+    rig = downward_rig()
+    if k1k2 is not None:
+        rig = dataclasses.replace(rig, camera=dataclasses.replace(rig.camera, dist=(*k1k2, *rig.camera.dist[2:])))
+    table = PixelsOnFloor.of(rig.camera, rig.mount)
+    rng = np.random.default_rng(4)
+    pixels = rng.uniform([0, 0], [rig.camera.width - 1, rig.camera.height - 1], (400, 2))
+    pixels = np.vstack([pixels, [[rig.camera.width - 0.6, 10.3], [-0.4, 20.0]]])  # past the last centres
+    points, valid = table(pixels)
+    exact, exact_valid = pixels_to_floor(rig.camera, rig.mount, pixels)
+    np.testing.assert_array_equal(valid, exact_valid)
+    footprint = rig.mount.height / rig.camera.fx  # metres a pixel covers straight below the camera
+    assert np.hypot(*(points - exact)[valid].T).max() < 5e-3 * footprint
+    np.testing.assert_array_equal(points[-2:][valid[-2:]], exact[-2:][valid[-2:]])
 
 
 def test_floor_points_above_the_horizon_are_invalid():

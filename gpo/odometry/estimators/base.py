@@ -24,7 +24,7 @@ import numpy as np
 
 from gpo.cameras import CameraModel
 from gpo.cameras.rig import CameraMount
-from gpo.floor_image.analytic import pixels_to_floor
+from gpo.floor_image.analytic import PixelsOnFloor
 from gpo.floor_image.image import FloorImage
 from gpo.motion.median import median_of
 
@@ -35,7 +35,8 @@ class FloorGeometry:
 
     For a floor image (``floor``): its affine map (``FloorImage.affine``); ``nadir_px`` is its pixel straight below
     the camera. For keypoints detected in the camera's own image (the ``keypoints`` route, ``floor`` None): the
-    ``camera`` model and its ``mount``, each pixel's ray followed down to the floor (``pixels_to_floor``).
+    ``camera`` model and its ``mount``, each pixel's ray followed down to the floor (``pixels_to_floor``, once per
+    pixel of the image: ``PixelsOnFloor``).
     """
 
     floor: FloorImage | None
@@ -70,11 +71,17 @@ class FloorGeometry:
         """A displacement (2,) in floor-image pixels as one in base_link, metres."""
         return self._to_metres[0].T @ vector
 
+    @functools.cached_property
+    def _pixels_on_floor(self) -> PixelsOnFloor:
+        """The camera's pixels put on the floor once (``gpo.floor_image.analytic.PixelsOnFloor``)."""
+        return PixelsOnFloor.of(self.camera, self.mount)
+
     def on_floor(self, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Pixels (N, 2) as floor points (N, 2) of base_link (metres), and which of them reach the floor (N,)."""
+        """Pixels (N, 2) as floor points (N, 2) of base_link (metres), and which of them reach the floor (N,): through
+        the floor image's affine map, or for the camera's own pixels its table of them on the floor."""
         if self.floor is not None:
             return self.metres(pixels), np.ones(len(pixels), dtype=bool)
-        return pixels_to_floor(self.camera, self.mount, pixels)
+        return self._pixels_on_floor(pixels)
 
 
 class FloorEstimator(ABC):
