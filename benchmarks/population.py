@@ -1,7 +1,7 @@
 """Every method over a population of drawn worlds, not one tuned world: its final-error distribution and its failures.
 
-    python benchmarks/population.py [--draws 30] [--first-seed 0] [--fused] [--matte] [--workers N]
-                                    [--scheduler ADDRESS] [--out SWEEP_FOLDER]
+    python benchmarks/population.py [--draws 30] [--first-seed 0] [--kind fisheye|downward] [--fused] [--matte]
+                                    [--workers N] [--scheduler ADDRESS] [--out SWEEP_FOLDER]
                                     [--write benchmarks/results/population.json]
 
 ``--draws`` worlds (seeds ``--first-seed`` on, ``gpo.sim.population.draw``: half fisheye rigs of the T265's
@@ -31,6 +31,10 @@ against the draw's true path (kept in the sweep folder's ``truth``), how the run
 (``heading_steps``): a steady drift, such as turns read short every time, or a random walk of each step's own noise.
 With ``--fused``, the fused route beside its two sources on each draw, the floor odometry it fuses and the tracking
 camera's own odometry, and the draws where it ends further off than the better of them (``sources_report``).
+
+``--kind`` keeps the draws of one kind of rig among those seeds (even seeds draw a fisheye, odd ones a downward
+camera): ``--draws 60 --kind downward`` runs only the 30 downward draws of the first 60 seeds, and their ``features``
+runs only.
 
 ``--matte`` runs the same draws with every floor matte (``gpo.sim.population.matte``: the same rigs, paths, drifts
 and textures, without the glossy screed's reflections of the ceiling lamps), so that what the reflections cost each
@@ -522,6 +526,7 @@ def main() -> int:
     parser.add_argument("--draws", type=int, default=30, help="worlds drawn (default 30: 15 of each kind of rig)")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--fused", action="store_true", help="also the fused method on the fisheye rigs")
+    parser.add_argument("--kind", choices=list(METHODS), help="only the draws of this kind of rig (default: both)")
     add_cluster_arguments(parser)
     parser.add_argument("--matte", action="store_true", help="the same draws with every floor matte (no sheen)")
     parser.add_argument("--out", type=Path, help="the sweep's folder (default: population or population-matte in "
@@ -537,6 +542,9 @@ def main() -> int:
     if args.write is not None and args.write.is_dir():
         parser.error(f"--write {args.write} is a folder; expected a JSON file's path")
     draws = [draw(seed) for seed in range(args.first_seed, args.first_seed + args.draws)]
+    draws = [chosen for chosen in draws if args.kind in (None, chosen.kind)]
+    if not draws:
+        parser.error(f"no {args.kind} draw among seeds {args.first_seed}-{args.first_seed + args.draws - 1}")
     if args.matte:
         draws = [matte(chosen) for chosen in draws]
     out = args.out or cache.folder("runs") / ("population-matte" if args.matte else "population")
