@@ -2,8 +2,10 @@
 bag: the same floor records, the same fused path whatever order the two sources' messages arrive in; and the run on
 two threads against the run on one (``gpo.io.ahead``)."""
 
+import dataclasses
 import math
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,10 +16,11 @@ from gpo.io.bag import Recording
 from gpo.pipeline.config import load_config
 from gpo.pipeline.live import LiveOdometer, RefusedMessage
 from gpo.pipeline.odometer import FloorOdometer
-from gpo.pipeline.run import run, tracking_mount
+from gpo.pipeline.run import odometry, run, tracking_mount
 from gpo.sim.record import recording
 
 STEP_NS = 5_000_000  # the tracking camera's 200 Hz
+DOWNWARD = Path(__file__).resolve().parents[1] / "gpo" / "configs" / "sim_downward.yaml"
 
 
 @pytest.fixture(scope="module")
@@ -134,6 +137,30 @@ def test_a_live_floor_odometer_gives_the_recorded_runs_records(bag, messages):
     assert odometer.latest is None
     with pytest.raises(ValueError, match="fuses tracking messages"):
         odometer.track(0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+
+
+@pytest.fixture(scope="module")
+def downward_frames():
+    """The first 150 frames of the downward camera's wood floor, and the downward config following keypoints by
+    Lucas-Kanade between keyframes (``features.follow: lk``)."""
+    config = load_config(DOWNWARD)
+    config = config.replace(features=dataclasses.replace(config.features, follow="lk"))
+    with Recording(recording("downward-wood", progress=False)) as recorded:
+        frames = [(frame.stamp_ns, frame.image) for frame, _ in zip(
+            recorded.frames(config.rig.image_topic, gray=True, progress=False), range(150), strict=False)]
+    return frames, config
+
+
+def test_a_live_keypoint_follower_gives_the_recorded_runs_records_on_one_thread_or_two(downward_frames):
+    frames, config = downward_frames
+    odometer = LiveOdometer(config)
+    records = [odometer.step(stamp, image) for stamp, image in frames]
+    assert sum(record.status.value == "measured" for record in records) == len(frames) - 1
+    assert records == odometry(frames, config).records
+    two = odometry(frames, config, threads=2).records
+    assert [(r.stamp_ns, r.pose, r.status, r.flag, r.inliers) for r in two] == [
+        (r.stamp_ns, r.pose, r.status, r.flag, r.inliers) for r in records
+    ]
 
 
 def test_the_fused_method_needs_the_tracking_cameras_mount():

@@ -34,16 +34,20 @@ import numpy as np
 
 from gpo.motion.keypoints import FeatureMatches, FeatureParameters, Keypoints, detect, filtered, matched, timed
 from gpo.motion.klt import KLTParameters
-from gpo.motion.levelling import levelled
+from gpo.motion.levelling import levelled, reduced_local_mean
 from gpo.motion.median import median_of
 from gpo.motion.turned_view import TurnedView
+
+PREDICTED_LEVELS = 1  # pyramid levels above the full image searched once the latest frame's motion predicts a start
+FLAT_FIELD_REDUCTION = 4  # a frame's local mean for the levelling is taken on the frame reduced this many times
 
 
 @dataclass(frozen=True, eq=False)
 class FollowFrame:
     """A frame made ready to follow keypoints into (``KeypointFollower.prepare``): the grey ``image`` (H, W) uint8,
     where a keyframe's keypoints are detected, and the image Lucas-Kanade searches, ``levelled`` (H, W) uint8: as the
-    floor image's KLT flow sees it (``gpo.motion.levelling``), divided by its local mean (``klt.flat_field_px``)
+    floor image's KLT flow sees it (``gpo.motion.levelling``), divided by its local mean (``klt.flat_field_px``,
+    taken on the frame reduced ``FLAT_FIELD_REDUCTION`` times: ``reduced_local_mean``)
     and scaled to one mean and contrast, so that neither the exposure's flicker from frame to frame nor the
     vignetting fixed to the camera pulls the searches."""
 
@@ -94,7 +98,7 @@ class KeypointFollower:
         if not p.normalise_brightness:
             return FollowFrame(image, image)
         level = image.astype(np.float32)
-        local_mean = cv2.blur(level, (p.flat_field_px, p.flat_field_px)) if p.flat_field_px else None
+        local_mean = reduced_local_mean(level, p.flat_field_px, FLAT_FIELD_REDUCTION) if p.flat_field_px else None
         return FollowFrame(image, levelled(level, local_mean, self._valid))
 
     def track(self, frame: FollowFrame | np.ndarray, time_s: float | None = None) -> FeatureMatches | None:
@@ -132,8 +136,11 @@ class KeypointFollower:
         search's small error is made once, not added up frame after frame (a chain of searches turned a path's
         heading 0.3-1.2 degrees where the keyframe's turned it 0.1-0.3 on draws of the population), starting where
         the keypoint was in the latest frame moved by the latest frame's motion; a frame turned from the keyframe is
-        searched in a view turned back (``gpo.motion.turned_view``). Once the motion is known, the search back to
-        the keyframe runs on the full-resolution image only: a right track is then near its start."""
+        searched in a view turned back (``gpo.motion.turned_view``). Once the motion is known, the search runs on
+        ``PREDICTED_LEVELS`` levels of the pyramid above the full image instead of all of them (a start predicted
+        from the latest frame is a few pixels off; a start further off fails the forward-backward check, and the
+        frame is matched with the keyframe), and the search back to the keyframe on the full image only: a right
+        track is then near its start."""
         p = self.klt
         keyframe, followed = self._keyframe, self._followed
         if not len(followed):
@@ -148,7 +155,8 @@ class KeypointFollower:
         criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, p.max_iterations, p.epsilon_px)
         lk = {"winSize": (p.window_px, p.window_px), "criteria": criteria, "flags": cv2.OPTFLOW_USE_INITIAL_FLOW}
         start, guess = start.reshape(-1, 1, 2), guess.reshape(-1, 1, 2)
-        end, status, _ = cv2.calcOpticalFlowPyrLK(self._image, image, start, guess, maxLevel=p.pyramid_levels, **lk)
+        levels = p.pyramid_levels if self._velocity is None else min(p.pyramid_levels, PREDICTED_LEVELS)
+        end, status, _ = cv2.calcOpticalFlowPyrLK(self._image, image, start, guess, maxLevel=levels, **lk)
         levels = 0 if self._velocity is not None else p.pyramid_levels
         back, back_status, _ = cv2.calcOpticalFlowPyrLK(image, self._image, end, start.copy(), maxLevel=levels, **lk)
         start, end, back = start.reshape(-1, 2), end.reshape(-1, 2), back.reshape(-1, 2)
