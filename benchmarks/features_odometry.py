@@ -7,18 +7,18 @@
 Each preset's recording is rendered on first use (on the cluster, ``gpo.sim.population.render``) and cached. Each
 (preset, configuration) is one run of a sweep (``gpo.batch``, on a local Dask cluster or the one at ``--scheduler``;
 locally one worker by default): the shipped config (``gpo/configs/sim_downward.yaml``: SIFT on the image scaled by
-0.5, a 480 x 320 region of interest, 300 keypoints, both filters, the refit) with only the named ``features`` fields
-changed, compared with the ground truth (``gpo.metrics``: final position error after placing the first pose on the
-truth's, heading RMSE); ``per-frame detector`` and ``keyframes + LK`` name both ways of finding the keyframe's
-keypoints in later frames (``features.follow``: detected and described in every frame and matched, or followed by
-Lucas-Kanade from keyframes) whichever the config ships; with ``--out`` the sweep's folder is kept and a second call
-reuses its runs. Every worker runs OpenCV on one thread (one core, the speed target's terms); the rate is the whole
-odometry's, reading the bag included, in wall-clock time (on a machine shared with other work
-``benchmarks/odometry_speed.py`` gives the process's CPU time too). Two workers finish the runs sooner, but two
-processes share the cores' caches and the memory's bandwidth and each then reads a few per cent fewer frames per
-second than one alone: the one worker keeps the rate one core's. Targets: on the high-texture ``downward-long``
-(16.5 m) a final error at most 0.2 % of the distance and a heading RMSE at most 1.4 degrees; the default
-configuration at least 35 frames per second.
+0.5, a 480 x 320 region of interest, 200 keypoints detected on keyframes and followed by Lucas-Kanade between them,
+both filters, the refit) with only the named ``features`` fields changed, compared with the ground truth
+(``gpo.metrics``: final position error after placing the first pose on the truth's, heading RMSE); ``per-frame
+detector`` and ``keyframes + LK`` name both ways of finding the keyframe's keypoints in later frames
+(``features.follow``: detected and described in every frame and matched, or followed by Lucas-Kanade from keyframes)
+whichever the config ships; with ``--out`` the sweep's folder is kept and a second call reuses its runs. Every
+worker runs OpenCV on one thread (one core, the speed target's terms); the rate is the whole odometry's, reading the
+bag included, in wall-clock time (on a machine shared with other work ``benchmarks/odometry_speed.py`` gives the
+process's CPU time too). Two workers finish the runs sooner, but two processes share the cores' caches and the
+memory's bandwidth and each then reads a few per cent fewer frames per second than one alone: the one worker keeps
+the rate one core's. Targets: on the high-texture ``downward-long`` (16.5 m) a final error at most 0.2 % of the
+distance and a heading RMSE at most 1.4 degrees; the default configuration at least 35 frames per second.
 """
 
 import argparse

@@ -56,15 +56,15 @@ def label(draw_label: str, variant: str) -> str:
 
 def measure(seeds: list[int], variants: list[str], out: Path, client, batch: int) -> pd.DataFrame:
     """Every (draw, variant) run, ``batch`` draws rendered and swept at a time; the sweep's table of these runs."""
-    labels = {}
+    keys = set()
     for first in range(0, len(seeds), batch):
         chosen = seeds[first : first + batch]
         print(f"seeds {chosen}: rendering", file=sys.stderr)
         bags = render_draws(client, [draw(seed) for seed in chosen])
         runs = [run_of(seed, bags[draw(seed).label], variant) for seed in chosen for variant in variants]
-        table = sweep(runs, out, client, progress=sys.stderr.isatty()).table
-        labels |= {r.label: r for r in runs}
-    table = table[table["recording"].isin(labels)].copy()
+        done = sweep(runs, out, client, progress=sys.stderr.isatty())
+        keys |= {*done.executed, *done.reused}
+    table = done.table[done.table["key"].isin(keys)].copy()  # this code's runs, not those of an earlier one
     table["draw"], table["variant"] = zip(*(name.split(": ", 1) for name in table["recording"]), strict=True)
     return table
 

@@ -55,8 +55,11 @@ def test_the_floor_image_route_follows_the_truth_too(wood):
 
 
 def test_keypoints_detected_beforehand_give_the_same_path(wood):
+    """With keypoints detected and matched in every frame (``features.follow: match``); the shipped follower, which
+    detects on its own keyframes, takes camera frames only."""
     bag, _ = wood
-    config = load_config(CONFIG)
+    shipped = load_config(CONFIG)
+    config = shipped.replace(features=dataclasses.replace(shipped.features, follow="match"))
     with Recording(bag) as recorded:
         stream = itertools.islice(recorded.frames(gray=True, progress=False), 60)
         frames = [(frame.stamp_ns, frame.image) for frame in stream]
@@ -65,6 +68,8 @@ def test_keypoints_detected_beforehand_give_the_same_path(wood):
     from_keypoints = odometry([(stamp, odometer.keypoints(image)) for stamp, image in frames], config)
     assert [r.status for r in from_images.records] == [r.status for r in from_keypoints.records]
     np.testing.assert_array_equal(from_images.trajectory.positions, from_keypoints.trajectory.positions)
+    with pytest.raises(ValueError, match="features method needs camera frames, not keypoints"):
+        FloorOdometer(shipped).step(*frames[0][:1], odometer.keypoints(frames[0][1]))
     flow = FloorOdometer(config.replace(method="gpo-exact", route="analytic"))
     with pytest.raises(ValueError, match="gpo-exact method needs camera frames"):
         flow.step(*frames[0][:1], odometer.keypoints(frames[0][1]))
