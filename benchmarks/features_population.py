@@ -21,6 +21,7 @@ worker (reading included; on a shared machine a rough guide: ``benchmarks/featur
 """
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
@@ -128,7 +129,7 @@ def main() -> int:
              "distance_m": _rounded(row["distance_m"]), "frames_per_second": _rounded(row["frames_per_second"])}
             for _, row in table.sort_values(["draw", "variant"]).iterrows()
         ]
-        document = {"command": "python benchmarks/features_population.py " + " ".join(sys.argv[1:]),
+        document = {"command": "python benchmarks/features_population.py " + shlex.join(sys.argv[1:]),
                     "seeds": [seeds[0], seeds[-1]], "draws": len(seeds), "variants": summary, "runs": runs}
         print(f"wrote {write_json(args.write, document)}")
     return 0

@@ -33,6 +33,7 @@ repeated ten times in one bag (900 frames, written to a temporary folder), so th
 """
 
 import argparse
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -260,7 +261,7 @@ def main() -> None:
         results.append(measure(name, args.method, args.repeat, args.slower, overrides))
         print_result(results[-1], args.slower_source)
     if args.write:
-        document = {"command": "python benchmarks/odometry_speed.py " + " ".join(sys.argv[1:]),
+        document = {"command": "python benchmarks/odometry_speed.py " + shlex.join(sys.argv[1:]),
                     "slower_source": args.slower_source, "results": results}
         print(f"wrote {write_json(args.write, document)}")
 
