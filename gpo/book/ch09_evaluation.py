@@ -1,7 +1,7 @@
 """Chapter 09, evaluation: evo's own command line beside ``gpo.metrics``, evaluated paths over the truth and their
 errors along the distance, Table 4's rows (``gpo.experiments.table4``) compared and drawn, the EKF's knobs tried on
 Table 4's inputs and a panel over every row under the alignment chosen (the population benchmark's results:
-``gpo.book.ch09_population``)."""
+``gpo.book.lab_b_population``)."""
 
 from __future__ import annotations
 
