@@ -14,6 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+import yaml
 from rosbags import rosbag1, rosbag2
 from rosbags.highlevel import AnyReader
 from rosbags.interfaces import QosDurability
@@ -614,6 +615,19 @@ def test_an_os_error_of_reading_the_messages_names_the_bag(tmp_path, monkeypatch
             ValueError, match=rf"^{re.escape(str(path))} is damaged or cannot be read: Invalid argument"
         ):
             next(frames)
+
+
+@pytest.mark.parametrize("count", ["many", [1, 2], None])
+def test_a_ros2_bag_whose_metadata_counts_its_messages_in_words_is_named(tmp_path, count):
+    """A damaged metadata.yaml whose message_count is no number (the campaign, seeds 48101-48303)."""
+    path = bag_path(tmp_path, "ros2")
+    with BagWriter(path, "ros2") as writer:
+        writer.add_image("/camera", T0, np.zeros((64, 64), np.uint8), CAMERA_FRAME)
+    metadata = yaml.safe_load((path / "metadata.yaml").read_text())
+    metadata["rosbag2_bagfile_information"]["message_count"] = count
+    (path / "metadata.yaml").write_text(yaml.safe_dump(metadata))
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))} is damaged: it counts {re.escape(repr(count))} "):
+        Recording(path)
 
 
 def test_an_os_error_of_opening_a_bag_names_it(tmp_path, monkeypatch):

@@ -153,9 +153,13 @@ class Recording:
             raise ValueError(f"{self.path} holds no messages: expected a recording with at least one")
 
     def _check_index(self) -> None:
-        """Each topic named by text, of a type named by text, counted by a whole number, and the first and last
-        times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say otherwise."""
+        """Each topic named by text, of a type named by text, counted by a whole number, the messages counted by one,
+        and the first and last times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say
+        otherwise."""
         problem = None
+        for count in (reader.message_count for reader in self.reader.readers):
+            if isinstance(count, bool) or not isinstance(count, int):
+                problem = f"it counts {count!r:.30} messages; expected a whole number"
         for connection in self.reader.connections:
             fields = (connection.topic, connection.msgtype, connection.msgcount)
             if not (isinstance(fields[0], str) and isinstance(fields[1], str) and isinstance(fields[2], int)):
