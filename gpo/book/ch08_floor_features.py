@@ -1,6 +1,8 @@
 """Chapter 08, the second paper's floor feature odometer: a recording's frames, keypoints, matches by fate, the
-histogram filter and the invariance check's loops, and the odometer's panel on one frame pair (the chapter's Table 2
-is ``gpo.experiments.table2``)."""
+histogram filter and the invariance check's loops, the calibration's errors, the tilt's cost over the image, heading
+errors along a path, what each stage is worth, Table 2's short form on three floors beside the paper's rows, the
+keypoints each floor gives, and the odometer's panel on one frame pair. The second paper's experiments and the
+ablation from its published method are lab C's (``gpo.book.lab_c_second_paper``)."""
 
 from __future__ import annotations
 
@@ -189,6 +191,123 @@ def draw_histogram_decisions(image, matches, ax=None, scale: float = 5.0, centre
             ax.plot([], [], color="tab:blue", lw=2, label=f"towards the centre of rotation, {away:.0f} px away")
     ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
     ax.set_title(f"the match vectors, {scale:g} times their length")
+    return ax
+
+
+def draw_calibration_errors(errors: dict, ax=None) -> plt.Axes:
+    """Each fitted parameter's error (parameter name -> error / its standard deviation) as a bar, with the bands
+    of one and two standard deviations shaded: where a calibration's errors should lie."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 3))
+    names = list(errors)
+    ax.axhspan(-2, 2, color="tab:green", alpha=0.08, label="within 2 standard deviations")
+    ax.axhspan(-1, 1, color="tab:green", alpha=0.15, label="within 1")
+    ax.bar(names, [errors[name] for name in names], color="tab:blue")
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_ylim(-3, 3)
+    ax.set_ylabel("error / standard deviation")
+    ax.legend(loc="upper right", fontsize="small")
+    return ax
+
+
+def draw_step_lengths(pixels, lengths_mm, size: tuple[int, int], ax=None) -> plt.Axes:
+    """A floor step measured at pixels (N, 2) all over a ``size`` (width, height) image, each dot coloured by the
+    length read there (mm), with a colour bar."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8.5, 4.5))
+    dots = ax.scatter(*np.asarray(pixels).T, c=lengths_mm, cmap="coolwarm", s=60)
+    ax.set_xlim(0, size[0])
+    ax.set_ylim(size[1], 0)
+    ax.set_aspect("equal")
+    ax.set_xlabel("u [px]")
+    ax.set_ylabel("v [px]")
+    ax.figure.colorbar(dots, ax=ax, label="the step read [mm]")
+    return ax
+
+
+def heading_error_deg(trajectory, truth) -> np.ndarray:
+    """The heading error (degrees, unwrapped) of ``trajectory`` at each of its poses against ``truth`` at the nearest
+    stamp not before it, both counted from their first pose."""
+    true_yaw = np.unwrap(truth.yaw)
+    index = np.minimum(np.searchsorted(truth.stamps_ns, trajectory.stamps_ns), len(true_yaw) - 1)
+    yaw = np.unwrap(trajectory.yaw)
+    return np.degrees((yaw - yaw[0]) - (true_yaw[index] - true_yaw[0]))
+
+
+def draw_heading_errors(paths: dict, truth, ax=None) -> plt.Axes:
+    """The heading error (degrees) against time (seconds from the start) of each trajectory of ``paths`` (label ->
+    ``gpo.io.trajectory.Trajectory``) against ``truth``."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(10, 3.6))
+    for label, trajectory in paths.items():
+        ax.plot(trajectory.times - trajectory.times[0], heading_error_deg(trajectory, truth), label=label)
+    ax.axhline(0, color="k", lw=0.6)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("heading error [deg]")
+    ax.legend(fontsize="small")
+    return ax
+
+
+def draw_stage_worth(measures: dict, axes=None) -> np.ndarray:
+    """What each variant of the odometer (label -> ``gpo.metrics.Evaluation.measures()``) ends at: its final error
+    (mm) and its heading RMSE (degrees) as horizontal bars on log scales, the first variant at the top."""
+    if axes is None:
+        _, axes = plt.subplots(1, 2, figsize=(12, 3.4), sharey=True)
+    labels = list(measures)[::-1]
+    columns = (("final_error_mm", "final error [mm]"), ("heading_rmse_deg", "heading RMSE [deg]"))
+    for ax, (key, label) in zip(axes, columns, strict=True):
+        ax.barh(labels, [measures[name][key] for name in labels], color="tab:blue")
+        ax.set_xscale("log")
+        ax.set_xlabel(label)
+        ax.grid(True, axis="x", which="both", alpha=0.3)
+    return axes
+
+
+PAPER_FLOORS = {"wood": ("I", "II"), "raised": ("III",), "industrial": ("IV", "V", "VI", "VII", "VIII", "IX")}
+"""The second paper's experiments on each kind of floor (its Table 1)."""
+
+
+def draw_table2_floors(rows: dict, paper: dict, axes=None, label: str = "the suite") -> np.ndarray:
+    """Table 2's final error (% of the distance) and heading RMSE (degrees) of the suite's run on each floor
+    (floor -> ``gpo.metrics.PaperTable2``), a bar per floor, beside the paper's own rows for the experiments on
+    that floor (number -> ``PaperTable2``, ``PAPER_FLOORS``), each a labelled black dot; log scales. ``label``
+    names the suite's bars."""
+    if axes is None:
+        _, axes = plt.subplots(1, 2, figsize=(12, 3.8))
+    columns = (("final_error_percent", "final error [% of the distance]"), ("heading_rmse_deg", "heading RMSE [deg]"))
+    for ax, (key, name) in zip(axes, columns, strict=True):
+        floors = list(rows)
+        ax.bar(floors, [getattr(rows[floor], key) for floor in floors], color="tab:blue", label=label)
+        shown = False
+        for place, floor in enumerate(floors):
+            numbers = [n for n in PAPER_FLOORS[floor] if np.isfinite(getattr(paper[n], key))]
+            for offset, number in zip(np.linspace(-0.35, 0.35, max(len(numbers), 1)), numbers, strict=False):
+                value = getattr(paper[number], key)
+                ax.plot(place + offset, value, "ko", ms=5, label=None if shown else "the paper's Table 2")
+                ax.annotate(number, (place + offset, value), xytext=(3, 3), textcoords="offset points", fontsize=8)
+                shown = True
+        ax.set_yscale("log")
+        bottom, top = ax.get_ylim()
+        ax.set_ylim(bottom, top * 4)  # room above the dots for their labels and the legend
+        ax.set_ylabel(name)
+    axes[0].legend(fontsize="small", loc="upper center")
+    return axes
+
+
+def draw_keypoint_counts(counts: dict, ax=None) -> plt.Axes:
+    """Keypoints found in one frame of each floor at each contrast threshold ((floor, threshold) -> count), grouped
+    by floor."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 3.4))
+    floors = list(dict.fromkeys(floor for floor, _ in counts))
+    thresholds = list(dict.fromkeys(threshold for _, threshold in counts))
+    width = 0.8 / len(thresholds)
+    for k, threshold in enumerate(thresholds):
+        places = np.arange(len(floors)) + (k - (len(thresholds) - 1) / 2) * width
+        ax.bar(places, [counts[floor, threshold] for floor in floors], width, label=f"contrast threshold {threshold}")
+    ax.set_xticks(range(len(floors)), floors)
+    ax.set_ylabel("keypoints in the frame")
+    ax.legend(fontsize="small")
     return ax
 
 
