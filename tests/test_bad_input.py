@@ -296,8 +296,8 @@ def test_a_bag_damaged_midway_names_the_bag_and_keeps_the_frames_before(world, t
     np.testing.assert_array_equal(kept.positions, whole.positions[: len(kept)])
 
 
-@pytest.mark.parametrize("nesting", ["[" * 5000 + "]" * 5000, "{a: " * 3000 + "1" + "}" * 3000])
-def test_a_ros2_bag_whose_metadata_nests_thousands_deep_is_named(world, tmp_path, capsys, nesting):
+@pytest.mark.parametrize("nesting", ["[" * 600 + "]" * 600, "{a: " * 600 + "1" + "}" * 600])
+def test_a_ros2_bag_whose_metadata_nests_hundreds_deep_is_named(world, tmp_path, capsys, nesting):
     path = write_bag(tmp_path / "deep", frames=3, fmt="ros2")
     metadata = path / "metadata.yaml"
     metadata.write_text(metadata.read_text() + f"\nextra: {nesting}\n")
