@@ -144,7 +144,7 @@ def test_plain_bands_drop_identical_vectors_and_every_short_side_is_judged():
 def test_a_published_gap_is_traced_to_the_step_that_removes_most_of_it(capsys):
     """I as published 1000 mm off, 9.1 times the paper's 109.8 mm: the step that divides the error by the most (18
     times) is named, not the one that removes the most millimetres at the start (100 mm)."""
-    from gpo.book.ch08_table2 import print_targets
+    from gpo.book.lab_c_second_paper import print_targets
 
     finals = dict(zip(ablation_configs(), (1000.0, 900.0, 50.0, 45.0, 45.0, 45.0, 42.0, 40.0), strict=True))
     saved = [{"pipeline": name, "experiment": "I", "final_error_mm": value, "final_error_percent": value / 178.3,

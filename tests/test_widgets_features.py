@@ -265,7 +265,7 @@ def test_panel_detects_once_per_detector(frames, monkeypatch):
 
 
 def test_the_histogram_decisions_are_drawn_by_band_and_scaled(frames):
-    from gpo.book.ch08_floor_features import draw_histogram_decisions
+    from gpo.book.lab_c_second_paper import draw_histogram_decisions
 
     matches = _matches(frames, **NOISY)
     orientation, length = matches.histogram

@@ -145,55 +145,6 @@ def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.A
     return ax
 
 
-HISTOGRAM_FATES = {  # which histogram dropped a match -> its colour
-    "dropped by the orientation band": "tab:red",
-    "dropped by the length band": "tab:orange",
-    "kept by both bands": "tab:green",
-}
-
-
-def draw_histogram_decisions(image, matches, ax=None, scale: float = 5.0, centre_px=None) -> plt.Axes:
-    """The histogram filter's decisions (the second paper's mu +- sigma bands) on the grey frame (H, W): each match
-    vector of a ``gpo.motion.keypoints.FeatureMatches`` drawn from its start, ``scale`` times its length, coloured by
-    ``HISTOGRAM_FATES``. ``centre_px`` (u, v), pixels: the centre of the frame pair's rotation, marked with a cross,
-    or when outside the frame, an arrow from the frame's centre towards it. When the filter did not run, only the
-    frame."""
-    ax = _frame(image, ax)
-    if matches.histogram is None:
-        ax.set_title("the histogram filter did not run")
-        return ax
-    start, end = matches.matched
-    orientation, length = matches.histogram
-    by_length = length.kept if length is not None else np.zeros(len(start), bool)
-    fates = {
-        "dropped by the orientation band": ~orientation.kept,
-        "dropped by the length band": orientation.kept & ~by_length,
-        "kept by both bands": by_length,
-    }
-    for fate, chosen in fates.items():
-        tips = start[chosen] + scale * (end[chosen] - start[chosen])
-        lines = LineCollection(np.stack([start[chosen], tips], axis=1), colors=HISTOGRAM_FATES[fate], lw=1.2)
-        lines.set_label(f"{chosen.sum()} {fate}")
-        ax.add_collection(lines)
-        ax.plot(*tips.T, ".", ms=3, color=HISTOGRAM_FATES[fate])
-    if centre_px is not None:
-        height, width = image.shape
-        centre = np.asarray(centre_px, dtype=float)
-        if 0 <= centre[0] < width and 0 <= centre[1] < height:
-            ax.plot(*centre, "x", ms=12, mew=2.5, color="tab:blue", label="centre of rotation")
-        else:
-            middle = np.array([width / 2, height / 2])
-            towards = (centre - middle) / np.linalg.norm(centre - middle) * 0.3 * min(width, height)
-            ax.annotate(
-                "", xy=middle + towards, xytext=middle, arrowprops={"arrowstyle": "->", "color": "tab:blue", "lw": 2}
-            )
-            away = np.hypot(*(centre - middle))
-            ax.plot([], [], color="tab:blue", lw=2, label=f"towards the centre of rotation, {away:.0f} px away")
-    ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
-    ax.set_title(f"the match vectors, {scale:g} times their length")
-    return ax
-
-
 def draw_calibration_errors(errors: dict, ax=None) -> plt.Axes:
     """Each fitted parameter's error (parameter name -> error / its standard deviation) as a bar, with the bands
     of one and two standard deviations shaded: where a calibration's errors should lie."""

@@ -1,11 +1,13 @@
-"""Chapter 08's Table 2 and its road from the paper's method as published to the shipped pipeline.
+"""Lab C, the second paper's experiments I-IX in its conditions: Table 2 as published and shipped, the road from the
+paper's method as published to the shipped pipeline (the ablation), the targets, and the mu +- sigma band in a turn.
 
-``python -m gpo.book.ch08_table2 [EXPERIMENTS]`` runs every step of ``gpo.experiments.table2.ablation_configs``
-over the experiments (default: ``ABLATED``, I, II, III, VIII and IX), each run kept on disk as Table 2's are, and
-prints Table 2 (as published and shipped), the ablation and the targets. The full-image SIFT of the published method
-takes a fifth of a second a frame on the wood floor, so the first call takes about half an hour on one core;
-``benchmarks/second_paper.py --write`` saves the same rows (``rows``) to ``benchmarks/results/second_paper.json``,
-which the chapter prints with the same functions (``print_table2``, ``print_ablation``, ``print_targets``).
+``python -m gpo.book.lab_c_second_paper [EXPERIMENTS]`` runs every step of
+``gpo.experiments.table2.ablation_configs`` over the experiments (default: ``ABLATED``, I, II, III, VIII and IX), each
+run kept on disk as Table 2's are, and prints Table 2 (as published and shipped), the ablation and the targets. The
+full-image SIFT of the published method takes a fifth of a second a frame on the wood floor, so the first call takes
+about half an hour on one core; ``benchmarks/second_paper.py --write`` saves the same rows (``rows``) to
+``benchmarks/results/second_paper.json``, which lab C prints with the same functions (``print_table2``,
+``print_ablation``, ``print_targets``) and draws (``draw_table2``, ``draw_ablation``).
 
 A row (``rows``) is a dict: ``pipeline`` (a step's name), ``experiment`` (I-IX), the columns of
 ``gpo.metrics.PaperTable2`` at the paper's ground-truth samples, the same prefixed ``continuous_`` against every
@@ -20,6 +22,8 @@ import dataclasses
 import math
 
 import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.collections import LineCollection
 
 from gpo.experiments.table2 import EXPERIMENTS, HEADER, ablation_configs, experiment, format_row, reproduce_table2
 from gpo.metrics import PaperTable2
@@ -99,6 +103,27 @@ def print_ablation(saved: list[dict], numbers=ABLATED) -> None:
     ))  # fmt: skip
 
 
+def draw_table2(saved: list[dict], pipelines=("as published", "shipped"), ax=None):
+    """The final error (% of the distance, log scale) of each experiment ``saved`` holds, a bar for each of
+    ``pipelines`` beside the paper's own (black, its Table 2's column)."""
+    numbers = [e.number for e in EXPERIMENTS if _find(saved, pipelines[0], e.number)]
+    if ax is None:
+        _, ax = plt.subplots(figsize=(11, 3.8))
+    width = 0.8 / (len(pipelines) + 1)
+    places = np.arange(len(numbers))
+    for k, pipeline in enumerate(pipelines):
+        values = [_find(saved, pipeline, number)["final_error_percent"] for number in numbers]
+        ax.bar(places + (k - len(pipelines) / 2) * width, values, width, label=pipeline)
+    paper = [experiment(number).paper.final_error_percent for number in numbers]
+    ax.bar(places + len(pipelines) / 2 * width, paper, width, color="k", label="the paper's Table 2")
+    ax.set_xticks(places, numbers)
+    ax.set_yscale("log")
+    ax.set_xlabel("experiment")
+    ax.set_ylabel("final error [% of distance]")
+    ax.legend(fontsize="small")
+    return ax
+
+
 def draw_ablation(saved: list[dict], numbers=ABLATED, ax=None):
     """The final error (% of the distance, log scale) of each step of the ablation, one line per experiment of
     ``numbers`` that ``saved`` holds, each with the paper's own final error dotted in its colour."""
@@ -118,6 +143,60 @@ def draw_ablation(saved: list[dict], numbers=ABLATED, ax=None):
     return ax
 
 
+HISTOGRAM_FATES = {  # which histogram dropped a match -> its colour
+    "dropped by the orientation band": "tab:red",
+    "dropped by the length band": "tab:orange",
+    "kept by both bands": "tab:green",
+}
+
+
+def draw_histogram_decisions(image, matches, ax=None, scale: float = 5.0, centre_px=None) -> plt.Axes:
+    """The histogram filter's decisions (the second paper's mu +- sigma bands) on the grey frame (H, W): each match
+    vector of a ``gpo.motion.keypoints.FeatureMatches`` drawn from its start, ``scale`` times its length, coloured by
+    ``HISTOGRAM_FATES``. ``centre_px`` (u, v), pixels: the centre of the frame pair's rotation, marked with a cross,
+    or when outside the frame, an arrow from the frame's centre towards it. When the filter did not run, only the
+    frame."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 4.5))
+    ax.imshow(image, cmap="gray", vmin=0, vmax=255)
+    ax.set_xlim(-0.5, image.shape[1] - 0.5)  # the frame, whatever the vectors' reach
+    ax.set_ylim(image.shape[0] - 0.5, -0.5)
+    ax.set_axis_off()
+    if matches.histogram is None:
+        ax.set_title("the histogram filter did not run")
+        return ax
+    start, end = matches.matched
+    orientation, length = matches.histogram
+    by_length = length.kept if length is not None else np.zeros(len(start), bool)
+    fates = {
+        "dropped by the orientation band": ~orientation.kept,
+        "dropped by the length band": orientation.kept & ~by_length,
+        "kept by both bands": by_length,
+    }
+    for fate, chosen in fates.items():
+        tips = start[chosen] + scale * (end[chosen] - start[chosen])
+        lines = LineCollection(np.stack([start[chosen], tips], axis=1), colors=HISTOGRAM_FATES[fate], lw=1.2)
+        lines.set_label(f"{chosen.sum()} {fate}")
+        ax.add_collection(lines)
+        ax.plot(*tips.T, ".", ms=3, color=HISTOGRAM_FATES[fate])
+    if centre_px is not None:
+        height, width = image.shape
+        centre = np.asarray(centre_px, dtype=float)
+        if 0 <= centre[0] < width and 0 <= centre[1] < height:
+            ax.plot(*centre, "x", ms=12, mew=2.5, color="tab:blue", label="centre of rotation")
+        else:
+            middle = np.array([width / 2, height / 2])
+            towards = (centre - middle) / np.linalg.norm(centre - middle) * 0.3 * min(width, height)
+            ax.annotate(
+                "", xy=middle + towards, xytext=middle, arrowprops={"arrowstyle": "->", "color": "tab:blue", "lw": 2}
+            )
+            away = np.hypot(*(centre - middle))
+            ax.plot([], [], color="tab:blue", lw=2, label=f"towards the centre of rotation, {away:.0f} px away")
+    ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
+    ax.set_title(f"the match vectors, {scale:g} times their length")
+    return ax
+
+
 def print_targets(saved: list[dict]) -> None:
     """The targets, each met or missed with its number: the shipped pipeline's final error on I-III and IX, its
     heading RMSE on I-II against the paper's, IV-VIII's final errors against the paper's; as published, I-III's
@@ -132,21 +211,27 @@ def print_targets(saved: list[dict]) -> None:
         row, paper = _find(saved, "shipped", number), experiment(number).paper
         if row is not None:
             value = row["heading_rmse_deg"]
-            print(f"shipped {number:5} heading RMSE {value:.2f} deg (the paper: {paper.heading_rmse_deg} deg): "
-                  f"{_met(value < paper.heading_rmse_deg)}")
+            print(
+                f"shipped {number:5} heading RMSE {value:.2f} deg (the paper: {paper.heading_rmse_deg} deg): "
+                f"{_met(value < paper.heading_rmse_deg)}"
+            )
     for number in ("IV", "V", "VI", "VII", "VIII"):
         row, paper = _find(saved, "shipped", number), experiment(number).paper
         if row is not None:
             value = row["final_error_mm"]
-            print(f"shipped {number:5} final error {value:.2f} mm (the paper: {paper.final_error_mm} mm): "
-                  f"{_met(value <= paper.final_error_mm)}")
+            print(
+                f"shipped {number:5} final error {value:.2f} mm (the paper: {paper.final_error_mm} mm): "
+                f"{_met(value <= paper.final_error_mm)}"
+            )
     for number in ("I", "II", "III"):
         row, paper = _find(saved, "as published", number), experiment(number).paper
         if row is None:
             continue
         times = row["final_error_mm"] / paper.final_error_mm
-        line = f"as published {number:4} final error {row['final_error_mm']:.1f} mm, {times:.1f} times the paper's " \
-               f"{paper.final_error_mm} mm"
+        line = (
+            f"as published {number:4} final error {row['final_error_mm']:.1f} mm, {times:.1f} times the paper's "
+            f"{paper.final_error_mm} mm"
+        )
         if times > PAPER_GAP:
             line += f"; the step that divides it most: {_largest_drop(saved, number)}"
         print(line)
@@ -181,5 +266,5 @@ def main(argv=None) -> None:
     print_report(rows(reproduce_table2(ablation_configs(), chosen)), [e.number for e in chosen])
 
 
-if __name__ == "__main__":  # `python -m gpo.book.ch08_table2`: the runs made or read back, and printed
+if __name__ == "__main__":  # `python -m gpo.book.lab_c_second_paper`: the runs made or read back, and printed
     main()
