@@ -54,7 +54,7 @@ recordings: $(STAMP)
 # Table 4's floor runs (chapter 09 reads them), Table 3's (chapter 05), chapter 08's floor runs and lab chapter A's
 # glossy ones (with short1's, with and without the check), kept in the cache: six jobs of a minute or two, longest
 # first, two at a time. The second paper's experiments I-IX and the ablation from its published method (full-image
-# SIFT: about half an hour on one core) are left to benchmarks/second_paper.py, whose saved rows chapter 08 prints
+# SIFT: about half an hour on one core) are left to benchmarks/second_paper.py, whose saved rows lab C prints
 TABLE_JOBS := "gpo table4 long3" "gpo table4 long1" "gpo table4 long2" "gpo table2 floors" "gpo.book.lab_a_glossy_floors" \
 	"gpo table3"
 tables: recordings
