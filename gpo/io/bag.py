@@ -75,29 +75,13 @@ _TO_GRAY = {
 }
 _FROM_BGR = {("bgr8", "rgb8"): cv2.COLOR_BGR2RGB, ("bgra8", "rgba8"): cv2.COLOR_BGRA2RGBA}
 
-_DAMAGED = (
-    AnyReaderError,
-    rosbag1.ReaderError,
-    rosbag2.ReaderError,
-    ValueError,
-    KeyError,
-    IndexError,
-    TypeError,
-    AttributeError,
-    AssertionError,
-    OverflowError,
-    EOFError,
-    MemoryError,
-    RecursionError,
-    struct.error,
-    sqlite3.Error,
-    apsw.Error,
-)
-"""What rosbags raises reading the bytes of a damaged bag (cut short, bits flipped, records out of order, a topic
-declaring another type than its messages hold; found by tests/fuzzing), each turned into a ValueError naming the bag.
-A MemoryError comes of a length field read as gigabytes, a RecursionError of a ROS 2 ``metadata.yaml`` nested
-thousands deep; a ROS 2 sqlite3 database is read through apsw, whose errors (``CorruptError``: "database disk image is
-malformed") are not sqlite3's."""
+_READERS = (AnyReaderError, rosbag1.ReaderError, rosbag2.ReaderError, sqlite3.Error, apsw.Error, struct.error)
+_MISREAD = (ValueError, KeyError, IndexError, TypeError, AttributeError, AssertionError, OverflowError, EOFError)
+_DAMAGED = (*_READERS, *_MISREAD, MemoryError, RecursionError)
+"""What rosbags (and apsw, through which it reads a ROS 2 sqlite3 database) raises reading the bytes of a damaged bag
+(cut short, bits flipped, records out of order, a topic declaring another type than its messages hold; found by
+tests/fuzzing), each turned into a ValueError naming the bag: a MemoryError comes of a length read as gigabytes, a
+RecursionError of a ROS 2 ``metadata.yaml`` nested hundreds deep."""
 
 
 class StampWarning(UserWarning):
@@ -153,9 +137,8 @@ class Recording:
             raise ValueError(f"{self.path} holds no messages: expected a recording with at least one")
 
     def _check_index(self) -> None:
-        """Each topic named by text, of a type named by text, counted by a whole number, the messages counted by one,
-        and the first and last times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say
-        otherwise."""
+        """Topics named by text, of types named by text, they and all messages counted by whole numbers, the first and
+        last times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say otherwise."""
         problem = None
         for count in (reader.message_count for reader in self.reader.readers):
             if isinstance(count, bool) or not isinstance(count, int):
