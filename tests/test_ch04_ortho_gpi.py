@@ -1,10 +1,12 @@
-"""Chapter 04's Table 1 read from a figure: every way of measuring the block is a group of bars, every image a bar."""
+"""Chapter 04's Table 1 read from a figure: every way of measuring the block is a group of bars, every image a bar; how
+much floor one fisheye pixel covers."""
 
 import matplotlib.pyplot as plt
 import pytest
 
-from gpo.book.ch04_ortho_gpi import TABLE1_FLOOR, draw_table1
+from gpo.book.ch04_ortho_gpi import TABLE1_FLOOR, draw_table1, fisheye_pixel_on_floor
 from gpo.experiments.table1 import PaperTable1Row, Table1Row
+from gpo.sim.rigs import t265_rig
 
 
 def test_table1_draws_the_papers_rows_the_suites_rows_and_its_own_measure():
@@ -27,3 +29,12 @@ def test_table1_draws_the_papers_rows_the_suites_rows_and_its_own_measure():
     assert min(widths) == TABLE1_FLOOR  # an error of zero is drawn at the floor of the log scale
     assert len(axes[0].get_yticklabels()) == 6
     plt.close(fig)
+
+
+def test_a_fisheye_pixel_covers_more_floor_further_ahead_and_more_along_than_across():
+    rig = t265_rig()
+    near_across, near_along = fisheye_pixel_on_floor(rig.camera, rig.mount, (0.75, 0.0))
+    far_across, far_along = fisheye_pixel_on_floor(rig.camera, rig.mount, (0.90, 0.0))
+    assert 0.5 < near_across < far_across < 1.5  # millimetres: about one across at the floor board
+    assert near_along > near_across and far_along > far_across  # the floor is seen at a slant: longer along
+    assert far_along > near_along

@@ -188,7 +188,8 @@ def fit_road_lines(ground_image, floor: FloorImage = CAR_FLOORS["left"]) -> dict
 
 def draw_car_ground_images(car_images: dict, cars: dict, views: dict, lines: dict[str, RoadLine]) -> plt.Figure:
     """The Kalibr car's left fisheye, its ground image with the road's ``lines`` (``fit_road_lines``) drawn dashed,
-    and the front camera's ground image; ``views``: ``car_ground_images``."""
+    and the front camera's ground image with the left camera's lane marking drawn dashed over it, and the sun's
+    smear (a bright column of the front fisheye, bent by the ground map) named; ``views``: ``car_ground_images``."""
     fig, axes = plt.subplots(1, 3, figsize=(15, 6.5), gridspec_kw={"width_ratios": [1.6, 1, 1.1]})
     axes[0].imshow(car_images["left"], cmap="gray")
     axes[0].set_title("the left fisheye (1280 x 800)")
@@ -200,8 +201,29 @@ def draw_car_ground_images(car_images: dict, cars: dict, views: dict, lines: dic
         axes[1].plot(line.slope * ends + line.offset, ends, "--", lw=1, color=colour)
     axes[1].set_title("its ground image, lines fitted")
     draw_floor_image(views["front"], CAR_FLOORS["front"], ax=axes[2], axes_length=1.0)
+    lane = lines["lane marking"]
+    ahead = np.array(CAR_FLOORS["front"].extent[:2])
+    axes[2].plot(lane.slope * ahead + lane.offset, ahead, "--", lw=1, color="tab:red")
+    for text, (y, x), at, colour in (
+        ("the left camera's\nlane marking", (2.9, 4.6), (4.0, 2.4), "tab:red"),
+        ("the sun's smear", (-2.5, 5.6), (-1.2, 2.6), "tab:orange"),
+    ):
+        axes[2].annotate(
+            text, (y, x), at, color=colour, fontsize="small", arrowprops={"arrowstyle": "->", "color": colour}
+        )
     axes[2].set_title("the front camera's ground image")
     return fig
+
+
+def fisheye_pixel_on_floor(camera, mount: CameraMount, xy, step_m: float = 1e-4) -> tuple[float, float]:
+    """How much floor one fisheye pixel covers at the floor point ``xy`` of base_link, (across, along) millimetres:
+    a step of ``step_m`` across (y) and along (x) the floor, projected by ``camera`` from its ``mount``, over the
+    pixels it moves in the fisheye."""
+    x, y = xy
+    points = np.array([[x, y, 0.0], [x, y + step_m, 0.0], [x + step_m, y, 0.0]])
+    pixels, _ = camera.project(mount.to_camera(points))
+    across, along = np.linalg.norm(pixels[1:] - pixels[0], axis=1)
+    return 1e3 * step_m / float(across), 1e3 * step_m / float(along)
 
 
 def table1_errors_panel(seed: int = 0) -> widgets.VBox:
