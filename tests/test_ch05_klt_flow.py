@@ -1,5 +1,5 @@
 """Chapter 05's figures: what each draws is what it was given (the tracks kept and refused, the tracks each pyramid
-depth keeps, the paper's Table 3 beside the suite's)."""
+depth keeps, the paper's Table 3 beside the suite's, the frames coasted and held)."""
 
 from types import SimpleNamespace
 
@@ -9,6 +9,8 @@ import pytest
 from matplotlib.quiver import Quiver
 
 from gpo.book.ch05_klt_flow import (
+    COASTING_COLOURS,
+    draw_coasting,
     draw_forward_backward,
     draw_lk_steps,
     draw_pyramid_levels,
@@ -76,3 +78,15 @@ def test_table3_draws_the_papers_averages_beside_the_suites():
     paper_bars, our_bars = ([patch.get_height() for patch in ax.patches] for ax in fig.axes)
     np.testing.assert_allclose(paper_bars[:4], [1e3 * v for v in PAPER_TABLE3.values["mean", "avg"]])
     np.testing.assert_allclose(our_bars[4:], [1e2 * v for v in PAPER_TABLE3.values["median", "avg"]])
+
+
+def test_the_coasting_figure_shades_each_run_of_coasted_and_held_frames():
+    times = np.arange(10) / 30.0
+    statuses = ["measured"] * 3 + ["coasted"] * 3 + ["held"] * 2 + ["measured", "coasted"]
+    ax = draw_coasting(times, times * 0.5, times * 0.4, statuses)
+    spans = ax.patches
+    colours = [span.get_facecolor()[:3] for span in spans]
+    coasted = plt.matplotlib.colors.to_rgb(COASTING_COLOURS["coasted"])
+    held = plt.matplotlib.colors.to_rgb(COASTING_COLOURS["held"])
+    assert colours.count(coasted) == 2 and colours.count(held) == 1  # two runs coasted, one held
+    assert [line.get_label() for line in ax.get_lines()] == ["truth", "odometry"]
