@@ -20,9 +20,9 @@ from evo.tools import file_interface
 from gpo.book.figures import draw_placed_paths
 from gpo.experiments.runs import floor_run, route_config
 from gpo.experiments.table4 import PATHS
-from gpo.fusion import FusionSettings, fuse
+from gpo.fusion import FusionSettings
 from gpo.io.bag import Recording
-from gpo.metrics import MAX_STAMP_DIFFERENCE_S, Alignment, evaluate, final_error
+from gpo.metrics import MAX_STAMP_DIFFERENCE_S, Alignment, evaluate
 from gpo.pipeline.run import tracking_path
 from gpo.sim.record import GROUND_TRUTH_TOPIC, recording
 
@@ -148,13 +148,6 @@ def fusion_inputs(paths=PATHS, settings: FusionSettings | None = None) -> dict[s
             floor = floor_run(bag, route_config("gpo", "ortho-gpi"))
             inputs[path] = floor, tracking_path(recorded, settings), recorded.trajectory(GROUND_TRUTH_TOPIC)
     return inputs
-
-
-def fused_final(floor, tracking, truth, settings: FusionSettings) -> tuple[float, float]:
-    """(final position error, % of the distance; final heading error, degrees) of the EKF of ``floor`` (a
-    ``FloorRun``) and ``tracking`` with ``settings``, against ``truth``."""
-    error = final_error(fuse(floor.trajectory, floor.inliers, tracking, settings, floor.spread_px).trajectory, truth)
-    return error.percent, float(np.degrees(error.heading_rad))
 
 
 def ordered(table, *chain) -> str:
