@@ -57,8 +57,8 @@ def arc_jacobian_in_filter():
 
 def noise_variants(settings: FusionSettings) -> dict[str, FusionSettings]:
     """``settings`` and six variants of its noise: the floor's sigmas three times larger, no bias states, the camera
-    or the floor trusted alone (the other's sigmas a thousand times larger), the process noise ten times smaller and
-    ten times larger."""
+    or the floor trusted alone (the other's sigmas a thousand times larger), the process noise densities ten times
+    smaller and ten times larger (its covariance Q a hundred times)."""
     no_biases = dataclasses.replace(
         settings,
         tracking_scale_sigma=0.0,
@@ -92,7 +92,8 @@ def noise_variants(settings: FusionSettings) -> dict[str, FusionSettings]:
 
 
 def scaled_process_noise(settings: FusionSettings, factor: float) -> FusionSettings:
-    """``settings`` with both process noise densities multiplied by ``factor``."""
+    """``settings`` with both process noise densities multiplied by ``factor`` (the process covariance Q by its
+    square)."""
     return dataclasses.replace(
         settings,
         accel_mps2=factor * settings.accel_mps2,
