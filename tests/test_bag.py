@@ -630,6 +630,21 @@ def test_a_ros2_bag_whose_metadata_counts_its_messages_in_words_is_named(tmp_pat
         Recording(path)
 
 
+@pytest.mark.parametrize("bag_format", ["ros2", "ros2-mcap"])
+def test_a_bag_whose_metadata_names_its_files_in_a_word_is_read_and_closed(tmp_path, bag_format):
+    """A damaged metadata.yaml whose ``files`` is text (the campaign, seeds 48101-48303): rosbags reads the bag by its
+    storage files and then fails to close it; what was read stands, and the bag is closed."""
+    path = bag_path(tmp_path, bag_format)
+    with BagWriter(path, bag_format) as writer:
+        writer.add_image("/camera", T0, np.full((64, 64), 7, np.uint8), CAMERA_FRAME)
+    metadata = yaml.safe_load((path / "metadata.yaml").read_text())
+    metadata["rosbag2_bagfile_information"]["files"] = "many"
+    (path / "metadata.yaml").write_text(yaml.safe_dump(metadata))
+    with Recording(path) as bag:
+        [frame] = bag.frames("/camera", progress=False)
+    assert frame.image[0, 0] == 7
+
+
 def test_an_os_error_of_opening_a_bag_names_it(tmp_path, monkeypatch):
     """A ROS 1 bag's chunk position damaged, sought past what the file system allows (the campaign, seed 48101)."""
     path = bag_path(tmp_path, "ros1")

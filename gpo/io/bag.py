@@ -31,6 +31,7 @@ images are read-only views of the message buffer (no copy): copy one before draw
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import logging
 import sqlite3
@@ -158,8 +159,10 @@ class Recording:
             raise ValueError(f"{self.path} is damaged: {problem}.{_repair_hint(self.path)}")
 
     def close(self) -> None:
-        """Close the recording's files."""
-        self.reader.close()
+        """Close the recording's files. A damaged ROS 2 ``metadata.yaml`` (its ``files`` no list) makes rosbags fail as
+        it closes: what was read stands, and the files close as the reader is let go."""
+        with contextlib.suppress(*_DAMAGED):
+            self.reader.close()
 
     def __enter__(self) -> Recording:
         return self
