@@ -1,8 +1,9 @@
 """Chapter 08, the second paper's floor feature odometer: a recording's frames, keypoints, matches by fate, the
-histogram filter and the invariance check's loops, the calibration's errors, the tilt's cost over the image, heading
-errors along a path, what each stage is worth, Table 2's short form on three floors beside the paper's rows, the
-keypoints each floor gives, and the odometer's panel on one frame pair. The second paper's experiments and the
-ablation from its published method are lab C's (``gpo.book.lab_c_second_paper``)."""
+histogram filter and the invariance check's loops, how the mu +- sigma bands select in a turn, the calibration's
+errors, the tilt's cost over the image, heading errors along a path, what each stage is worth, Table 2's short form
+on three floors beside the paper's rows, the keypoints each floor gives, and the odometer's panel on one frame pair.
+The second paper's experiments and the ablation from its published method are lab C's
+(``gpo.book.lab_c_second_paper``)."""
 
 from __future__ import annotations
 
@@ -126,8 +127,8 @@ def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.A
     """The loops of the invariance check (the second paper's Algorithm 1, its Figs. 7-8) of a
     ``gpo.motion.keypoints.FeatureMatches`` on the previous grey frame (H, W): each a closed polygon through its
     matches'
-    start points, pixels of the full image, kept loops green and rejected ones red, at most ``max_loops`` of each
-    (the first tried). When the check did not run, only the frame."""
+    start points, pixels of the full image, kept loops green and rejected ones red (drawn thicker), at most
+    ``max_loops`` of each (the first tried). When the check did not run, only the frame."""
     ax = _frame(image, ax)
     check = matches.invariance
     if check is None:
@@ -135,13 +136,47 @@ def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.A
         return ax
     start = matches.matched[0][np.flatnonzero(matches.histogram_kept)]  # the check's input, which its loops index
     loops = np.array(check.loops, dtype=int).reshape(-1, check.cardinality)
-    for kept, colour, name in ((True, "tab:green", "kept"), (False, "tab:red", "rejected")):
+    for kept, colour, name, width in ((True, "tab:green", "kept", 0.8), (False, "tab:red", "rejected", 2.0)):
         shown = loops[check.kept_loops == kept][:max_loops]
-        polygons = PolyCollection(start[shown], closed=True, facecolors="none", edgecolors=colour, lw=0.8)
+        polygons = PolyCollection(start[shown], closed=True, facecolors="none", edgecolors=colour, lw=width)
         polygons.set_label(f"{len(shown)} {name} loops shown")
         ax.add_collection(polygons)
     ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
     ax.set_title(f"{int(check.kept_loops.sum())} of {len(loops)} loops kept, C = {check.cardinality}")
+    return ax
+
+
+def draw_band_selection(start, end, kept, right, band: tuple[float, float], ax=None) -> plt.Axes:
+    """How the length band of the histogram filter selects in a turn: each match's vector length (px) against where
+    it starts across the motion (its start (M, 2) projected on the normal of the kept vectors' mean direction: its u
+    for a motion down the image), the right matches kept by the filters (``kept`` (M,) bool) green, the right ones
+    dropped grey, the wrong ones (``right`` (M,) False) red; the band (low, high) of lengths shaded, and a least-squares
+    line through the right matches and one through the kept, each labelled with its slope (px of length per px
+    across: about the turn, in radians)."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(9, 4))
+    start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    vectors = end - start
+    mean = vectors[kept].mean(axis=0)
+    normal = np.array([mean[1], -mean[0]]) / np.hypot(*mean)
+    across, length = start @ normal, np.hypot(*vectors.T)
+    ax.axhspan(*band, color="tab:green", alpha=0.1, label="the length band")
+    groups = (
+        (right & ~kept, "0.55", "right, dropped"),
+        (right & kept, "tab:green", "right, kept"),
+        (~right, "tab:red", "wrong"),
+    )
+    for chosen, colour, name in groups:
+        ax.plot(across[chosen], length[chosen], ".", color=colour, ms=6, label=f"{chosen.sum()} {name}")
+    reach = np.array([across[right].min(), across[right].max()])
+    for chosen, colour, name in ((right, "k", "the right ones"), (right & kept, "tab:green", "the kept")):
+        slope, offset = np.polyfit(across[chosen], length[chosen], 1)
+        ax.plot(reach, slope * reach + offset, color=colour, lw=1.2, label=f"least squares, {name}: slope {slope:.4f}")
+    low, high = np.percentile(length[right], [0, 100])
+    ax.set_ylim(low - 0.3 * (high - low), high + 0.15 * (high - low))
+    ax.set_xlabel("where the match starts, across the motion [px]")
+    ax.set_ylabel("length of the match vector [px]")
+    ax.legend(fontsize="small", loc="lower right", ncols=2)
     return ax
 
 
@@ -218,11 +253,20 @@ PAPER_FLOORS = {"wood": ("I", "II"), "raised": ("III",), "industrial": ("IV", "V
 """The second paper's experiments on each kind of floor (its Table 1)."""
 
 
+def paper_value(row, key: str) -> float:
+    """A column ``key`` of one of the paper's rows of Table 2 (a ``gpo.metrics.PaperTable2``), the final error in %
+    (``final_error_percent``) computed from its own columns, 100 e_N / distance: the paper's printed % is that only
+    for its IV."""
+    if key == "final_error_percent":
+        return row.final_error_mm / row.distance_m / 10.0
+    return getattr(row, key)
+
+
 def draw_table2_floors(rows: dict, paper: dict, axes=None, label: str = "the suite") -> np.ndarray:
     """Table 2's final error (% of the distance) and heading RMSE (degrees) of the suite's run on each floor
     (floor -> ``gpo.metrics.PaperTable2``), a bar per floor, beside the paper's own rows for the experiments on
-    that floor (number -> ``PaperTable2``, ``PAPER_FLOORS``), each a labelled black dot; log scales. ``label``
-    names the suite's bars."""
+    that floor (number -> ``PaperTable2``, ``PAPER_FLOORS``; the final error as ``paper_value`` computes it), each a
+    labelled black dot; log scales. ``label`` names the suite's bars."""
     if axes is None:
         _, axes = plt.subplots(1, 2, figsize=(12, 3.8))
     columns = (("final_error_percent", "final error [% of the distance]"), ("heading_rmse_deg", "heading RMSE [deg]"))
@@ -231,10 +275,11 @@ def draw_table2_floors(rows: dict, paper: dict, axes=None, label: str = "the sui
         ax.bar(floors, [getattr(rows[floor], key) for floor in floors], color="tab:blue", label=label)
         shown = False
         for place, floor in enumerate(floors):
-            numbers = [n for n in PAPER_FLOORS[floor] if np.isfinite(getattr(paper[n], key))]
+            numbers = [n for n in PAPER_FLOORS[floor] if np.isfinite(paper_value(paper[n], key))]
             for offset, number in zip(np.linspace(-0.35, 0.35, max(len(numbers), 1)), numbers, strict=False):
-                value = getattr(paper[number], key)
-                ax.plot(place + offset, value, "ko", ms=5, label=None if shown else "the paper's Table 2")
+                value = paper_value(paper[number], key)
+                dots = "the paper's Table 2 (final error: e_N / distance)"
+                ax.plot(place + offset, value, "ko", ms=5, label=None if shown else dots)
                 ax.annotate(number, (place + offset, value), xytext=(3, 3), textcoords="offset points", fontsize=8)
                 shown = True
         ax.set_yscale("log")
