@@ -138,18 +138,18 @@ class Recording:
             raise ValueError(f"{self.path} holds no messages: expected a recording with at least one")
 
     def _check_index(self) -> None:
-        """Topics named by text, of types named by text, they and all messages counted by whole numbers, the first and
-        last times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say otherwise."""
+        """Topics named by text, of types named by text, they and all messages counted by whole numbers from 0, the
+        first and last times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say otherwise."""
         problem = None
         for count in (reader.message_count for reader in self.reader.readers):
-            if isinstance(count, bool) or not isinstance(count, int):
-                problem = f"it counts {count!r:.30} messages; expected a whole number"
+            if not (type(count) is int and count >= 0):  # no flag, no text
+                problem = f"it counts {count!r:.30} messages; expected a whole number from 0"
         for connection in self.reader.connections:
-            fields = (connection.topic, connection.msgtype, connection.msgcount)
-            if not (isinstance(fields[0], str) and isinstance(fields[1], str) and isinstance(fields[2], int)):
+            name, kind, count = connection.topic, connection.msgtype, connection.msgcount
+            if not (isinstance(name, str) and isinstance(kind, str) and type(count) is int and count >= 0):
                 problem = (
-                    f"a topic {fields[0]!r:.60} of type {fields[1]!r:.60} with {fields[2]!r:.20} messages; "
-                    "expected names and a count"
+                    f"a topic {name!r:.60} of type {kind!r:.60} with {count!r:.20} messages; "
+                    "expected names and a count, a whole number from 0"
                 )
         times = (self.reader.start_time, self.reader.end_time)
         if not all(isinstance(time, int) and -(2**63) <= time < 2**63 for time in times):
