@@ -401,6 +401,57 @@ def test_a_full_disk_keeps_the_earlier_result_whole(world, tmp_path, capsys, mon
     assert not (tmp_path / "copy.bag").exists()
 
 
+KILLED_RUN = """
+import os, pathlib, signal, sys
+stop, name = sys.argv[1], sys.argv[2]
+rename, write_text = os.replace, pathlib.Path.write_text
+staged = lambda path: pathlib.Path(path).name == name and pathlib.Path(path).parent.name.endswith(".partial")
+
+def replace(source, target):  # killed at once, as kill -9 does, before the rename of a staged file onto name
+    if stop == "rename" and staged(source) and pathlib.Path(target).name == name:
+        os.kill(os.getpid(), signal.SIGKILL)
+    rename(source, target)
+
+def written(self, text, *args, **kwargs):  # killed half way through writing name
+    if stop == "write" and staged(self):
+        write_text(self, text[:10])
+        os.kill(os.getpid(), signal.SIGKILL)
+    return write_text(self, text, *args, **kwargs)
+
+os.replace, pathlib.Path.write_text = replace, written
+from gpo.cli import main
+sys.exit(main(sys.argv[3:]))
+"""
+
+
+@pytest.mark.parametrize(
+    ("stop", "name", "after"),
+    [
+        ("write", "t.summary.yaml", "gpo-exact"),  # killed while the new summary is written: the old set stays
+        ("rename", "t.tum", "gpo-rigid"),  # killed before the first rename: the new set is finished
+        ("rename", "t.summary.yaml", "gpo-rigid"),  # killed between the two renames: the new set is finished
+    ],
+)
+def test_a_run_killed_while_it_writes_leaves_one_set_the_next_time_its_folder_is_used(world, tmp_path, capsys, stop,
+                                                                                       name, after):
+    """``gpo run --out t.tum`` over the files of an earlier run (gpo-exact) is killed (kill -9) as it writes a new
+    run's (gpo-rigid): once the folder is used again (here by another run), the trajectory and its summary are one
+    run's, the old or the new, each checked against that method's path computed through the library."""
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root], ["run", world.bag(), "--config", world.config, "--out", out], 0, f"wrote {out}")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])}
+    arguments = ["run", world.bag(), "--config", world.config, "--out", out, "--method", "gpo-rigid"]
+    killed = subprocess.run([sys.executable, "-c", KILLED_RUN, stop, name, *map(str, arguments)], env=env,
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert killed.returncode == -signal.SIGKILL, killed.stderr
+    assert any(path.name.endswith(".partial") for path in tmp_path.iterdir())  # what the killed write left
+    check(capsys, [world.root], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "other.tum"], 0)
+    assert not any(path.name.endswith(".partial") for path in tmp_path.iterdir())
+    assert summary(out)["method"] == after
+    np.testing.assert_array_equal(Trajectory.read_tum(out).positions, _path(world, method=after).positions)
+    assert np.abs(_path(world, method="gpo-rigid").positions - _path(world).positions).max() > 0.01  # two paths
+
+
 def test_a_full_cache_is_named_and_the_run_goes_on(world, tmp_path, capsys, monkeypatch):
     """The floor image's remap table, built, cannot be kept in the cache: the run uses it, says which folder is full,
     and writes its trajectory, the same as with room."""
