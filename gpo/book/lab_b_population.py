@@ -127,27 +127,33 @@ def failing_text(result: dict) -> str:
     return "\n".join(lines)
 
 
+LISTED_OVER_POINTS = 0.01  # sources_text lists a draw where the fused route ends more than this further off (points)
+
+
 def sources_text(result: dict) -> str:
     """The fused route beside its two sources, the floor odometry it fuses and the tracking camera alone, over a
     ``benchmarks/population.py --fused`` result: on how many draws it ends further off than the better of them, and
-    the draws where it does by more than a hundredth of a per cent."""
+    the draws where it does by more than ``LISTED_OVER_POINTS`` (points of % of the distance), said in the first line
+    with their count."""
     sources = result["sources"]
     floor = sources["floor_method"]
     runs = sources["runs"]
-    lines = [
-        f"fused worse than the better of {floor} and the camera alone on {sources['worse']} of {sources['draws']} draws"
-    ]
     over = {label: np.inf if row["over_better"] is None else row["over_better"] for label, row in runs.items()}
+    lines = []
     for label in sorted(over, key=lambda label: -over[label]):
         row = runs[label]
         if row["fused"] is None:
             lines.append(f"  {label}: fused did not finish")
-        elif over[label] > 0.01:
+        elif over[label] > LISTED_OVER_POINTS:
             lines.append(
                 f"  {label}: fused {row['fused']:.3f} %, {floor} {row[floor]:.3f} %, camera "
                 f"{row['camera']:.3f} % (x{row['ratio']:.2f} the better)"
             )
-    return "\n".join(lines)
+    head = (
+        f"fused worse than the better of {floor} and the camera alone on {sources['worse']} of {sources['draws']} "
+        f"draws; by more than {LISTED_OVER_POINTS} points on {len(lines)}:"
+    )
+    return "\n".join([head, *lines])
 
 
 def population_groups(result: dict) -> dict[str, dict[str, list[float]]]:
@@ -189,14 +195,20 @@ def _p90(errors) -> str:
     return "      -" if errors is None or not len(errors) else f"{np.percentile(errors, 90):7.3f}"
 
 
-def draw_population_distributions(populations: dict[str, dict], methods: tuple[str, ...]) -> plt.Figure:
-    """One panel a method: each draw's final error (log scale) by floor kind and finish (circles matte, diamonds
-    glossy), one column of points per population side by side, its median a bar, with the method's p90 target."""
-    fig, axes = plt.subplots(1, len(methods), figsize=(5.5 * len(methods), 4), sharey=True, squeeze=False)
+def draw_population_distributions(
+    populations: dict[str, dict], methods: tuple[str, ...], columns: int = 3
+) -> plt.Figure:
+    """One panel a method, ``columns`` panels a row: each draw's final error (log scale) by floor kind and finish
+    (circles matte, diamonds glossy), one column of points per population side by side, its median a bar, with the
+    method's p90 target. Panels left over in the last row are hidden."""
+    rows_of_panels = -(-len(methods) // columns)
+    fig, axes = plt.subplots(
+        rows_of_panels, columns, figsize=(5.2 * columns, 4 * rows_of_panels), sharey=True, squeeze=False
+    )
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     rng = np.random.default_rng(0)  # the points' sideways jitter
     groups = [(kind, shine) for kind in FLOOR_KINDS for shine in FINISHES]
-    for ax, method in zip(axes[0], methods, strict=True):
+    for ax, method in zip(axes.flat, methods, strict=False):
         for p, (name, result) in enumerate(populations.items()):
             rows = [row for row in run_errors(result) if row[0] == method]
             for g, (kind, shine) in enumerate(groups):
@@ -214,7 +226,11 @@ def draw_population_distributions(populations: dict[str, dict], methods: tuple[s
         ax.set_yscale("log")
         ax.set_xticks(range(len(groups)), [f"{kind}\n{shine}" for kind, shine in groups], fontsize="small")
         ax.set_title(method)
-    axes[0, 0].set_ylabel("final position error [% of distance]")
+        ax.grid(True, axis="y", alpha=0.3)
+    for ax in axes.flat[len(methods) :]:
+        ax.set_visible(False)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("final position error [% of distance]")
     handles, labels = axes[0, 0].get_legend_handles_labels()
     unique = dict(zip(labels, handles, strict=True))
     axes[0, 0].legend(unique.values(), unique.keys(), fontsize="small")
