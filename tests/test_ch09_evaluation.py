@@ -1,11 +1,12 @@
 """Chapter 09's figures: Table 4's rows against the paper's, each row's turn bias against its final heading, the EKF's
-yaw-bias estimate and final headings, the drift per metre against the final error."""
+yaw-bias estimate and final headings, the drift against the final error, the EKF rows as pale bands."""
 
 from types import SimpleNamespace
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from matplotlib.colors import to_hex
 
 from gpo.book.ch09_evaluation import (
     draw_drift_against_final,
@@ -76,7 +77,24 @@ def test_the_yaw_bias_estimate_is_drawn_with_the_truth_and_each_prediction():
         for path in ("long1", "long2")
     }
     finals = {"GPO alone": [-2.2, -0.6], "camera alone": [2.5, 2.7]}
-    left, right = draw_yaw_bias(fused, 0.001, {"long1": 0.00197, "long2": 0.00153}, finals)
+    bar_styles = {"GPO alone": {"color": "tab:red"}, "camera alone": {"color": "tab:orange", "hatch": "//"}}
+    left, right = draw_yaw_bias(fused, 0.001, {"long1": 0.00197, "long2": 0.00153}, finals, bar_styles)
     np.testing.assert_allclose(left.lines[0].get_ydata(), 2.0)  # mrad/s
     assert left.lines[0].get_xdata()[0] == 0.0  # seconds from the start
     assert len(right.patches) == 4
+    assert to_hex(right.patches[0].get_facecolor()) == to_hex("tab:red")  # each label's bars in its style
+    assert right.patches[2].get_hatch() == "//" and to_hex(right.patches[2].get_facecolor()) == to_hex("tab:orange")
+
+
+def test_an_ekf_row_is_a_pale_band_in_its_floor_odometrys_colour_under_its_line():
+    floor, fused, analytic = (
+        Row("floor", "gpo", "gpi"),
+        Row("fused", "gpo", "gpi"),
+        Row("floor", "gpo-exact", "analytic"),
+    )
+    styles = row_styles((floor, fused, analytic, Row("camera")))
+    assert styles[fused.label]["color"] == styles[floor.label]["color"] == "tab:red"
+    assert styles[fused.label]["ls"] == styles[floor.label]["ls"] == "--"  # the route's dashes kept
+    assert styles[fused.label]["lw"] > 2 * styles[floor.label]["lw"] and styles[fused.label]["alpha"] < 0.5
+    assert styles[fused.label]["zorder"] < 2  # under the floor odometry's line (matplotlib draws lines at 2)
+    assert styles[analytic.label]["ls"] == ":" and styles[Row("camera").label]["color"] == "tab:orange"

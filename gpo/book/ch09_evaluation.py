@@ -1,6 +1,6 @@
 """Chapter 09, evaluation: evo's own command line beside ``gpo.metrics``, evaluated paths over the truth and their
 errors along the distance, Table 4's rows (``gpo.experiments.table4``) compared and drawn (the paper's rows against
-the suite's, each row's turn bias against its final heading, the drift per metre against the final error), the EKF's
+the suite's, each row's turn bias against its final heading, the drift against the final error), the EKF's
 inputs and its estimate of the camera's yaw bias, and a panel over every row under the alignment chosen. (The
 population benchmark's results are lab B's: ``gpo.book.lab_b_population``.)"""
 
@@ -159,29 +159,27 @@ def ordered(table, *chain) -> str:
     return f"mean: {on_mean!s:<5}  every path: {on_paths}"
 
 
-ROW_COLOURS = {  # (source, method) of a row of Table 4 -> its colour
+ROW_COLOURS = {  # (source, method) of a row of Table 4 -> its colour; an EKF row takes its floor odometry's
     ("camera", None): "tab:orange",
     ("floor", "gpo"): "tab:red",
-    ("fused", "gpo"): "tab:purple",
     ("floor", "gpo-exact"): "tab:blue",
-    ("fused", "gpo-exact"): "tab:cyan",
     ("floor", "gpo-rigid"): "tab:green",
-    ("fused", "gpo-rigid"): "tab:olive",
     ("floor", "features"): "tab:brown",
 }
 ROUTE_LINES = {None: "-", "ortho-gpi": "-", "gpi": "--", "analytic": ":"}  # a row's route -> its line style
+EKF_BAND = {"lw": 6.0, "alpha": 0.3, "zorder": 1}  # an EKF row: a wide pale band under its floor odometry's line
 
 
 def row_styles(rows) -> dict[str, dict]:
-    """Each row's label -> its line's style: colour by source and method, dashes by route, the EKF's lines thicker."""
-    return {
-        row.label: {
-            "color": ROW_COLOURS[row.source, row.method],
-            "ls": ROUTE_LINES[row.route],
-            "lw": 2.2 if row.source == "fused" else 1.2,
-        }
-        for row in rows
-    }
+    """Each row's label -> its line's style: colour by method, dashes by route; an EKF row in its floor odometry's
+    colour as a wide pale band (``EKF_BAND``) drawn under the floor odometry's line, so that both stay visible where
+    they coincide."""
+    styles = {}
+    for row in rows:
+        source = "floor" if row.source == "fused" else row.source
+        style = {"color": ROW_COLOURS[source, row.method], "ls": ROUTE_LINES[row.route], "lw": 1.2}
+        styles[row.label] = style | EKF_BAND if row.source == "fused" else style
+    return styles
 
 
 def draw_table4_paths(table, styles: dict, end_m: float = 0.45) -> plt.Figure:
@@ -270,34 +268,41 @@ def draw_turn_bias(found: dict, styles: dict, ax=None) -> plt.Axes:
     _annotate_apart(ax, found)
     ax.axhline(0.0, color="k", lw=0.8)
     ax.axvline(0.0, color="k", lw=0.8)
-    ax.set_xlabel("turn bias: heading steps read against the truth's, minus 1 [%]")
+    ax.set_xlabel("turn bias κ: heading steps read against the truth's, minus 1 [%]")
     ax.set_ylabel("final heading error [deg]")
     ax.grid(True, alpha=0.3)
     return ax
 
 
-def draw_yaw_bias(fused: dict, true_bias: float, predicted: dict, finals: dict, axes=None) -> np.ndarray:
+PATH_COLOURS = ("tab:blue", "tab:green", "tab:purple")  # the paths' lines in the yaw-bias figure
+
+
+def draw_yaw_bias(
+    fused: dict, true_bias: float, predicted: dict, finals: dict, bar_styles: dict | None = None, axes=None
+) -> np.ndarray:
     """Left: the EKF's estimate of the camera's yaw-rate bias over time on each path (``fused``: path -> its
-    ``FusedPath``), the simulator's bias (``true_bias``, rad/s) and each path's prediction (``predicted``: path ->
-    rad/s) as lines. Right: the final heading error on each path (``finals``: label -> one value a path, degrees) as
-    grouped bars."""
+    ``FusedPath``), the simulator's bias (``true_bias``, rad/s) and each path's prediction b - kappa mean turn rate
+    (``predicted``: path -> rad/s) as lines. Right: the final heading error on each path (``finals``: label -> one
+    value a path, degrees) as grouped bars, each label's bars in its ``bar_styles`` (label -> keyword arguments of
+    ``Axes.bar``, such as colour, alpha and hatch)."""
     if axes is None:
         _, axes = plt.subplots(1, 2, figsize=(14, 4), gridspec_kw={"width_ratios": [1.3, 1]})
     left, right = axes
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for colour, (path, result) in zip(colours, fused.items(), strict=False):
+    for colour, (path, result) in zip(PATH_COLOURS, fused.items(), strict=False):
         seconds = result.trajectory.times - result.trajectory.times[0]
         left.plot(seconds, 1e3 * result.biases[:, 1], color=colour, label=f"{path}: estimate")
         left.axhline(1e3 * predicted[path], color=colour, ls="--", lw=1)
     left.axhline(1e3 * true_bias, color="k", ls=":", label="the simulator's bias")
-    left.plot([], [], color="0.4", ls="--", lw=1, label="predicted: b - k mean turn rate")
+    left.plot([], [], color="0.4", ls="--", lw=1, label="predicted: b - κ · mean turn rate")
     left.set_xlabel("time [s]")
     left.set_ylabel("camera's yaw-rate bias [mrad/s]")
     left.legend(fontsize="small")
     paths = list(fused)
     width = 0.8 / len(finals)
+    bar_styles = bar_styles or {}
     for k, (label, values) in enumerate(finals.items()):
-        right.bar(np.arange(len(paths)) + (k - (len(finals) - 1) / 2) * width, values, width, label=label)
+        x = np.arange(len(paths)) + (k - (len(finals) - 1) / 2) * width
+        right.bar(x, values, width, label=label, **bar_styles.get(label, {}))
     right.axhline(0.0, color="k", lw=0.8)
     right.set_xticks(range(len(paths)), paths)
     right.set_ylabel("final heading error [deg]")
@@ -306,8 +311,9 @@ def draw_yaw_bias(fused: dict, true_bias: float, predicted: dict, finals: dict, 
 
 
 def draw_drift_against_final(table, styles: dict, ax=None) -> plt.Axes:
-    """Each row of a ``Table4``: its final position error against its drift per metre, both as means over the paths
-    in % (log scales), a point a row in its style's colour, labelled."""
+    """Each row of a ``Table4``: its final position error (% of the distance) against its drift (the mean RPE of its
+    1 m segments, % of a segment's length), both as means over the paths (log scales), a point a row in its style's
+    colour (the EKF's rows hollow squares), labelled."""
     if ax is None:
         _, ax = plt.subplots(figsize=(9, 5))
     points = {}
@@ -333,6 +339,6 @@ def draw_drift_against_final(table, styles: dict, ax=None) -> plt.Axes:
     ax.set_xlim(right=ax.get_xlim()[1] * 4)  # room for the labels
     _annotate_apart(ax, points)
     ax.set_xlabel("final position error [% of the distance]")
-    ax.set_ylabel("drift [% per metre]")
+    ax.set_ylabel("drift: mean RPE over 1 m segments [% of 1 m]")
     ax.grid(True, which="both", alpha=0.3)
     return ax
