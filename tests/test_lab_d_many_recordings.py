@@ -19,6 +19,7 @@ SPEED = {
     "speedup_bound": 1.57,
     "overhead_per_run_s": 0.055,
     "overhead_percent_of_a_minute": 0.09,
+    "mean_run_s_on_workers": 0.22,
     "identical_results": True,
     "speedups_each_repeat": [1.29, 1.26, 1.45],
 }
@@ -36,9 +37,11 @@ def test_a_sweeps_folder_is_listed_with_each_runs_key_written_key(tmp_path):
 def test_the_speed_is_told_against_its_targets():
     lines = speed_text(SPEED).splitlines()
     assert lines[0] == "24 runs of the test recording, 3 repeats (medians), 2 workers on 2 cores"
-    assert lines[4].startswith("speed-up 1.38 (target 1.8: missed); bound 1.57")
-    assert lines[5] == "speed-up of each repeat: 1.29 1.26 1.45"
-    assert lines[6].endswith("(target under 5 %: met)") and lines[7].endswith("True")
+    assert lines[4].startswith("speed-up 1.38 = 4.60 s / 3.34 s, the ratio of the medians (target 1.8: missed)")
+    assert lines[5] == "speed-up of each repeat: 1.29 1.26 1.45 (their median 1.29)"
+    assert lines[6].startswith("estimated bound 1.57 = 2 workers x 4.60 s / 5.87 s")
+    assert "(target under 5 %: met), 25 % of one of these runs (0.220 s on a worker)" in lines[7]
+    assert lines[8].endswith("True")
 
 
 def test_the_speed_is_drawn_as_times_and_repeats():
@@ -46,4 +49,8 @@ def test_the_speed_is_drawn_as_times_and_repeats():
     times, repeats = figure.axes
     assert len(times.patches) == 4  # three wall times and the cluster's start
     assert list(repeats.lines[0].get_ydata()) == [1.29, 1.26, 1.45]
+    assert [line.get_label() for line in repeats.lines[1:3]] == [
+        "ratio of the median times",
+        "estimated bound (from the medians)",
+    ]
     plt.close(figure)
