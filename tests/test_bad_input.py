@@ -1037,6 +1037,17 @@ def test_evaluate_names_bag_and_topic_of_a_truth_with_nan(world, tmp_path, capsy
           "1700000000.099999999 s")
 
 
+def test_evaluate_names_bag_and_topic_of_a_truth_with_a_quaternion_of_zero_length(world, tmp_path, capsys):
+    """Found by the campaign (seeds 49111-49333): the Trajectory's refusal named neither the bag nor the topic."""
+    bag = tmp_path / "zero_quaternion.bag"
+    with BagWriter(bag) as writer:
+        for i in range(6):
+            writer.add_pose("/mocap/base_link", START_NS + i * FRAME_NS, [0.01 * i, 0.0, 0.0],
+                            [0, 0, 0, 0.0 if i == 3 else 1], "world")
+    check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), bag, "--gt-topic", "/mocap/base_link"], 1,
+          f"{bag}, topic /mocap/base_link: quaternion 3 has zero length")
+
+
 @pytest.mark.parametrize("delta", ["0", "-1", "nan", "inf", "one"])
 def test_evaluate_refuses_a_bad_delta_as_usage(world, tmp_path, capsys, delta):
     check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), world.truth(), "--delta", delta], 2,

@@ -84,6 +84,8 @@ def test_reads_the_real_groundtruth_file(fetch_or_skip):
         ("# t x y z qx qy qz qw\n2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", ":3: '1 0 0 0 0 0 0 1': the stamps go backwards"),
         ("1 0 0 0 0 0 0 1\n\n2 0 0 0 0 0 0 0\n", ":3: '2 0 0 0 0 0 0 0': the quaternion .* has zero length"),
         ("1 0 0 0 0 0 0 1\n2 nan 0 0 0 0 0 1\n", ":2: '2 nan 0 0 0 0 0 1': positions and quaternions must be finite"),
+        # found by the campaign (seeds 49111-49333): a length that overflows normalised every component to zero
+        ("1 0 0 0 0 0 0 1\n2 0 0 0 0 -6e158 0 1\n", ":2: '2 0 0 0 0 -6e158 0 1': the quaternion .* too long"),
     ],
 )
 def test_bad_tum_files_name_the_line_counted_from_one(tmp_path, content, message):

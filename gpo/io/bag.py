@@ -536,14 +536,12 @@ def _trajectory(poses: list, context: str) -> Trajectory:
             stacklevel=3,
         )
     keep = np.delete(order, repeated)
-    frame_id, child_frame_id = frame_pairs[0]
-    return Trajectory(
-        stamps[keep],
-        np.array(positions)[keep],
-        np.array(quaternions)[keep],
-        frame_id,
-        "base_link" if child_frame_id is None else child_frame_id,
-    )
+    frame_id, child = frame_pairs[0]
+    try:  # what Trajectory refuses of finite poses (a quaternion of zero length) is named with the bag and topic
+        return Trajectory(stamps[keep], np.array(positions)[keep], np.array(quaternions)[keep], frame_id,
+                          "base_link" if child is None else child)
+    except ValueError as error:
+        raise ValueError(f"{context}: {error}") from error
 
 
 def _camera_from_info(message, context: str) -> Camera:
