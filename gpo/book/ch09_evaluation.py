@@ -248,23 +248,21 @@ def _annotate_apart(ax, points: dict) -> None:
         ax.annotate(label, xy, xytext=(5, dy), textcoords="offset points", fontsize="x-small")
 
 
+def _scatter_row(ax: plt.Axes, x: float, y: float, style: dict) -> None:
+    """One row's point in its style's colour: a filled dot, or a hollow square for the EKF's rows (drawn wider)."""
+    fused = style.get("lw", 1) > 2
+    colour = style.get("color", "k")
+    ax.scatter(x, y, s=90 if fused else 30, marker="s" if fused else "o", zorder=3,
+               facecolors="none" if fused else colour, edgecolors=colour)
+
+
 def draw_turn_bias(found: dict, styles: dict, ax=None) -> plt.Axes:
     """Each row's turn bias against its final heading error (``found``: label -> (turn bias %, final heading degrees),
     means over the paths), a point a row in its style's colour (the EKF's rows hollow squares), labelled."""
     if ax is None:
         _, ax = plt.subplots(figsize=(9, 5))
     for label, (turn, heading) in found.items():
-        fused = styles.get(label, {}).get("lw", 1) > 2  # the EKF's rows: hollow squares
-        colour = styles.get(label, {}).get("color", "k")
-        ax.scatter(
-            turn,
-            heading,
-            s=90 if fused else 30,
-            marker="s" if fused else "o",
-            zorder=3,
-            facecolors="none" if fused else colour,
-            edgecolors=colour,
-        )
+        _scatter_row(ax, turn, heading, styles.get(label, {}))
     _annotate_apart(ax, found)
     ax.axhline(0.0, color="k", lw=0.8)
     ax.axvline(0.0, color="k", lw=0.8)
@@ -321,17 +319,7 @@ def draw_drift_against_final(table, styles: dict, ax=None) -> plt.Axes:
         evaluations = table.evaluations[row].values()
         final = np.mean([evaluation.final.percent for evaluation in evaluations])
         drift = np.mean([evaluation.drift_percent_per_m for evaluation in evaluations])
-        fused = styles.get(row.label, {}).get("lw", 1) > 2  # the EKF's rows: hollow squares
-        colour = styles.get(row.label, {}).get("color", "k")
-        ax.scatter(
-            final,
-            drift,
-            s=90 if fused else 30,
-            marker="s" if fused else "o",
-            zorder=3,
-            facecolors="none" if fused else colour,
-            edgecolors=colour,
-        )
+        _scatter_row(ax, final, drift, styles.get(row.label, {}))
         points[row.label] = final, drift
     ax.set_xscale("log")
     ax.set_yscale("log")
