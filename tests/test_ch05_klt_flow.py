@@ -19,11 +19,7 @@ from gpo.book.ch05_klt_flow import (
 )
 from gpo.experiments.table3 import PAPER_TABLE3
 
-
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 IMAGE = np.full((60, 80), 128, np.uint8)

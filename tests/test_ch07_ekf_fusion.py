@@ -29,11 +29,7 @@ from gpo.fusion.ekf import ProcessNoise, motion_jacobian, process_covariance
 from gpo.io.trajectory import Trajectory
 from gpo.odometry.kinematics import arc_increment, compose, integrate
 
-
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 def _arc(rate_hz: float, seconds: float = 3.0, sigma=(0.0, 0.0), seed: int = 0) -> Trajectory:

@@ -3,7 +3,6 @@ yaw-bias estimate and final headings, the drift against the final error, the EKF
 
 from types import SimpleNamespace
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from matplotlib.colors import to_hex
@@ -17,11 +16,7 @@ from gpo.book.ch09_evaluation import (
 )
 from gpo.experiments.table4 import PAPER_TABLE4, Row
 
-
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 class FakeTable:

@@ -3,7 +3,6 @@ what measured each step."""
 
 from types import SimpleNamespace
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
@@ -19,11 +18,7 @@ from gpo.metrics import FinalError
 from gpo.pipeline.config import load_config
 from gpo.pipeline.odometer import Status
 
-
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 def test_the_three_variants_turn_the_check_off_on_and_never_wary():

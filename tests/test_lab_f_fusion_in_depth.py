@@ -3,7 +3,6 @@ fused path, and the saved acceptance runs drawn."""
 
 import math
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from hypothesis import given
@@ -23,11 +22,7 @@ from gpo.fusion.ekf import motion_jacobian
 from gpo.io.trajectory import Trajectory
 from gpo.odometry.kinematics import arc_increment
 
-
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 def _arc_motion(state: np.ndarray, dt: float) -> np.ndarray:

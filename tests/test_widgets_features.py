@@ -27,10 +27,7 @@ SIZE = (320, 240)  # width, height
 NOISY = {"detector": "orb", "ratio": 1.0, "invariance_threshold": 0.95}  # wrong matches for both filters to reject
 
 
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 def _floor(seed=0) -> np.ndarray:
