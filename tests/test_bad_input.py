@@ -934,6 +934,7 @@ def test_a_missing_camchain_names_the_config_and_its_key(world, tmp_path, capsys
         ("", ["a config is a YAML mapping", "NoneType"]),
         ("- a list\n- of things\n", ["a config is a YAML mapping", "list"]),
         (b"\x89PNG\r\n\x1a\n\x00\x00\xff\xfe", ["not a text file"]),
+        ("!!float", ["not valid YAML", "a value tagged !!int, !!float, !!bool or !!timestamp is empty"]),
     ],
 )
 def test_config_files_that_are_not_configs(world, tmp_path, capsys, text, words):
