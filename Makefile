@@ -51,11 +51,11 @@ recordings: $(STAMP)
 		paper2-iv paper2-viii short2 short3 short1 \
 		downward-wood downward-raised downward-industrial glossy test
 
-# Table 4's floor runs (chapter 09 reads them), Table 3's (chapter 05), chapter 08's floor runs and chapter 05's
-# glossy ones, kept in the cache: six jobs of a minute or two, longest first, two at a time. The second paper's
-# experiments I-IX and the ablation from its published method (full-image SIFT: about half an hour on one core) are
-# left to benchmarks/second_paper.py, whose saved rows chapter 08 prints
-TABLE_JOBS := "gpo table4 long3" "gpo table4 long1" "gpo table4 long2" "gpo table2 floors" "gpo.book.ch05_glossy" \
+# Table 4's floor runs (chapter 09 reads them), Table 3's (chapter 05), chapter 08's floor runs and lab chapter A's
+# glossy ones (with short1's, with and without the check), kept in the cache: six jobs of a minute or two, longest
+# first, two at a time. The second paper's experiments I-IX and the ablation from its published method (full-image
+# SIFT: about half an hour on one core) are left to benchmarks/second_paper.py, whose saved rows lab C prints
+TABLE_JOBS := "gpo table4 long3" "gpo table4 long1" "gpo table4 long2" "gpo table2 floors" "gpo.book.lab_a_glossy_floors" \
 	"gpo table3"
 tables: recordings
 	$(PHASE) tables sh -c 'printf "%s\n" $(TABLE_JOBS) | xargs -P 2 -L 1 $(BIN)/python -m > /dev/null'
@@ -67,10 +67,12 @@ wheel: recordings
 	$(PHASE) wheel .ci/wheel $(BIN)/uv $(PYTHON)
 
 # the checks whose printed numbers a floating-point path could change run again on two other paths of this machine
-# (.ci/fp-path: avx2, then sse4): every chapter under nbval (the mounts chapters 01 and 10 measure among them), and the
+# (.ci/fp-path: avx2, then sse4): the chapters under nbval (the mounts chapters 01 and 10 measure among them), and the
 # calibration, fusion and papers' tables tests. They read the recordings and kept runs that the machine's own path made
-# (cache keys do not depend on the path)
-FP_CHECKS := notebooks tests/test_calibrate.py tests/test_calibrate_models.py tests/test_camera_fit.py \
+# (cache keys do not depend on the path). Lab B prints saved benchmark results, and lab E runs every path itself, each
+# in a process of its own: they run once, in the pytest phase
+FP_NOTEBOOKS := $(filter-out notebooks/B_% notebooks/E_%,$(wildcard notebooks/*.ipynb))
+FP_CHECKS := $(FP_NOTEBOOKS) tests/test_calibrate.py tests/test_calibrate_models.py tests/test_camera_fit.py \
 	tests/test_fusion.py tests/test_fusion_pipeline.py tests/test_table1.py tests/test_table3_metric.py \
 	tests/test_table4.py tests/test_paper_table2.py tests/test_paper_equations.py
 PYTEST := $(BIN)/python -m pytest -p no:cacheprovider -n 2 --dist loadfile

@@ -7,11 +7,11 @@ Runs the strategies of tests/fuzzing (the ones tests/test_fuzz.py draws a few of
 and command and per seed (default 800, over 10 000 in all), hypothesis seeded by each ``S`` in turn, and every input
 through ``fuzzing.examine``. Prints, per reader, the inputs tried over every seed, how many were read whole and how
 many refused (in part), its findings by kind, the slowest read, and every finding (a traceback, a hang over
-``HANG_S`` s, a changed input, a wrong result, an error that names no file) once per kind and place; then the
-totals. What goes wrong in the harness itself on an input is a finding too (a traceback), never the campaign's end.
-Each finding's input is written to ``DIR/TARGET/NUMBER`` with what was done to its seed (``how.txt``), and
-``--replay`` reads it again and prints what happens. Exits 1 when a traceback, hang, changed input or wrong result
-was found.
+``HANG_S`` s of processor time, a changed input, a wrong result, an error that names no file) once per kind and
+place; then the totals. What goes wrong in the harness itself on an input is a finding too (a traceback), never
+the campaign's end. Each finding's input is written to ``DIR/TARGET/NUMBER`` with what was done to its seed
+(``how.txt``), and ``--replay`` reads it again and prints what happens. Exits 1 when a traceback, hang, changed
+input or wrong result was found.
 """
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ def main() -> int:
         f"\n{totals['tried']} inputs in {time.perf_counter() - started:.0f} s: "
         + ", ".join(f"{kind} {totals[kind]}" for kind in FAILING)
         + f", unclear error {unclear} (and {totals['unclear, left to the caller']} where the reader leaves naming"
-        + f" the file to its caller); hangs are reads over {HANG_S:.0f} s"
+        + f" the file to its caller); hangs are reads over {HANG_S:.0f} s of processor time"
     )
     return 1 if failing else 0
 

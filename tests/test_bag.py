@@ -14,6 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+import yaml
 from rosbags import rosbag1, rosbag2
 from rosbags.highlevel import AnyReader
 from rosbags.interfaces import QosDurability
@@ -614,6 +615,57 @@ def test_an_os_error_of_reading_the_messages_names_the_bag(tmp_path, monkeypatch
             ValueError, match=rf"^{re.escape(str(path))} is damaged or cannot be read: Invalid argument"
         ):
             next(frames)
+
+
+@pytest.mark.parametrize("count", ["many", [1, 2], None])
+def test_a_ros2_bag_whose_metadata_counts_its_messages_in_words_is_named(tmp_path, count):
+    """A damaged metadata.yaml whose message_count is no number (the campaign, seeds 48101-48303)."""
+    path = bag_path(tmp_path, "ros2")
+    with BagWriter(path, "ros2") as writer:
+        writer.add_image("/camera", T0, np.zeros((64, 64), np.uint8), CAMERA_FRAME)
+    metadata = yaml.safe_load((path / "metadata.yaml").read_text())
+    metadata["rosbag2_bagfile_information"]["message_count"] = count
+    (path / "metadata.yaml").write_text(yaml.safe_dump(metadata))
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))} is damaged: it counts {re.escape(repr(count))} "):
+        Recording(path)
+
+
+@pytest.mark.parametrize(("whole", "each"), [(-3, None), (2, -1)])
+def test_a_ros2_bag_whose_metadata_counts_fewer_than_no_messages_is_named(tmp_path, whole, each):
+    """A damaged metadata.yaml whose message_count, or a topic's, is below zero: a count is a whole number from 0
+    (``gpo info`` listed the topics with -1 messages at -5.5 Hz)."""
+    path = bag_path(tmp_path, "ros2")
+    with BagWriter(path, "ros2") as writer:
+        writer.add_image("/camera", T0, np.zeros((64, 64), np.uint8), CAMERA_FRAME)
+        writer.add_image("/camera", T0 + 10**8, np.zeros((64, 64), np.uint8), CAMERA_FRAME)
+    metadata = yaml.safe_load((path / "metadata.yaml").read_text())
+    information = metadata["rosbag2_bagfile_information"]
+    information["message_count"] = whole
+    for topic in information["topics_with_message_count"] if each is not None else ():
+        topic["message_count"] = each
+    (path / "metadata.yaml").write_text(yaml.safe_dump(metadata))
+    said = (
+        f"it counts {whole} messages"
+        if each is None
+        else f"a topic '/camera' of type 'sensor_msgs/msg/Image' with {each}"
+    )
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))} is damaged: {re.escape(said)}.*from 0"):
+        Recording(path)
+
+
+@pytest.mark.parametrize("bag_format", ["ros2", "ros2-mcap"])
+def test_a_bag_whose_metadata_names_its_files_in_a_word_is_read_and_closed(tmp_path, bag_format):
+    """A damaged metadata.yaml whose ``files`` is text (the campaign, seeds 48101-48303): rosbags reads the bag by its
+    storage files and then fails to close it; what was read stands, and the bag is closed."""
+    path = bag_path(tmp_path, bag_format)
+    with BagWriter(path, bag_format) as writer:
+        writer.add_image("/camera", T0, np.full((64, 64), 7, np.uint8), CAMERA_FRAME)
+    metadata = yaml.safe_load((path / "metadata.yaml").read_text())
+    metadata["rosbag2_bagfile_information"]["files"] = "many"
+    (path / "metadata.yaml").write_text(yaml.safe_dump(metadata))
+    with Recording(path) as bag:
+        [frame] = bag.frames("/camera", progress=False)
+    assert frame.image[0, 0] == 7
 
 
 def test_an_os_error_of_opening_a_bag_names_it(tmp_path, monkeypatch):

@@ -161,13 +161,18 @@ def test_every_page_leads_on_through_the_book(book):
 
 
 def test_the_front_page_links_every_chapter_and_its_sections(book):
-    contents = _soup(book / "index.html").select_one("div.toctree-wrapper")
-    links = contents.find_all("a", href=True)
+    parts = _soup(book / "index.html").select("div.toctree-wrapper")
+    assert [part.select_one("p.caption").get_text(strip=True) for part in parts] == list(_toc_parts())
+    for part, pages in zip(parts, _toc_parts().values(), strict=True):
+        chapters = [link["href"] for link in part.find_all("a", href=True) if "#" not in link["href"]]
+        assert chapters == [f"{page}.html" for page in pages]
+    links = [link for part in parts for link in part.find_all("a", href=True)]
     for notebook in NOTEBOOKS:
         page = f"{notebook.stem}.html"
         assert (book / page).is_file()
         headings = _markdown_headings(_notebook(notebook))
-        assert contents.find("a", href=page).get_text() == _plain(headings[0])
+        titles = [link.get_text() for link in links if link["href"] == page]
+        assert titles == [_plain(headings[0])], notebook.stem
         sections = {link.get_text() for link in links if link["href"].startswith(page + "#")}
         assert {_plain(h) for h in headings if h.startswith("## ")} <= sections, notebook.stem
 

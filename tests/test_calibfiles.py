@@ -196,10 +196,15 @@ def test_basalt_and_boofcv_files_of_the_wrong_form_name_the_file_and_field(tmp_p
     [
         ("cam0: " + "[" * 5000 + "]" * 5000 + "\n", "line 1, column 107: not valid YAML: lists or mappings nested"),
         ("cam0: \x1d\n", "not valid YAML: unacceptable character #x001d"),
+        ("!!float", "not valid YAML: a value tagged !!int, !!float, !!bool or !!timestamp is empty"),
+        ("cam0:\n  camera_model: !!bool\n", "not valid YAML: a value tagged"),
+        ("cam0:\n  resolution: [848, !!int +]\n", "not valid YAML: a value tagged"),
+        ("cam0: !!timestamp tomorrow\n", "not valid YAML: a value tagged"),
         ("\n".join([f"l0: &l0 [{', '.join(['x'] * 10)}]"] + [f"l{k}: &l{k} [{', '.join([f'*l{k - 1}'] * 10)}]"
                                                            for k in range(1, 7)]), "aliases expand to more than"),
     ],
-    ids=["nested 5000 deep", "a control character", "an alias bomb"],
+    ids=["nested 5000 deep", "a control character", "an empty !!float", "an empty !!bool", "!!int +",
+         "a !!timestamp that is none", "an alias bomb"],
 )
 def test_a_calibration_is_read_as_safely_as_a_config(tmp_path, text, words):
     """Each refused at once, naming the file (before, PyYAML's own error, or seconds of work, or memory)."""

@@ -101,6 +101,26 @@ def test_detection_order_follows_the_board_where_its_colours_tell():
         assert np.abs(found - truth).max() < 0.3
 
 
+def test_an_image_searched_again_is_answered_without_the_detector(fisheye_views, monkeypatch):
+    """The same image and question: the corners the detector found before, a copy each time; another question or
+    another image: the detector again."""
+    calls = []
+    detector = cv2.findChessboardCornersSB
+    monkeypatch.setattr(cv2, "findChessboardCornersSB", lambda *args, **kwargs: calls.append(1) or detector(*args,
+                                                                                                           **kwargs))
+    image = fisheye_views[5].image.copy()
+    image[0, 0] ^= 1  # an image no other test searched
+    first = find_corners(image, CALIBRATION_BOARD.pattern_size)
+    first[:] = 0.0  # the caller's copy
+    again = find_corners(image.copy(), CALIBRATION_BOARD.pattern_size)
+    assert len(calls) == 1
+    assert matches_up_to_half_turn(again, fisheye_views[5].corners, CALIBRATION_BOARD.pattern_size, 0.3)
+    find_corners(image, (5, 4))  # another board
+    image[0, 1] ^= 1
+    find_corners(image, CALIBRATION_BOARD.pattern_size)  # another image
+    assert len(calls) == 3
+
+
 def test_a_board_the_plain_detectors_miss_is_found_in_a_perspective_view():
     # a large board at 53 degrees off axis, cut by the image's top edge
     board = Chessboard((8, 6), 0.05, 0.03)

@@ -1,5 +1,6 @@
 """The command line: ``python -m gpo demo`` writes what it says it writes."""
 
+import errno
 import re
 import subprocess
 import sys
@@ -8,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import gpo.cli.demo
 from gpo.cameras import T265_LIKE
 from gpo.cli import main
 from gpo.io.bag import Recording
@@ -25,6 +27,26 @@ def test_demo_writes_figures_and_the_field_of_view_table(tmp_path):
     table = (tmp_path / "field_of_view.txt").read_text().splitlines()
     horizontal = np.degrees(T265_LIKE.field_of_view()[0])
     assert table[0].startswith("EUCM alpha=0.6, beta=1.1:") and f"horizontal {horizontal:.1f} deg" in table[0]
+
+
+def test_the_demo_replaces_a_run_s_trajectory_summary_and_plot_as_one_set(tmp_path, monkeypatch):
+    """The disk fills as the demo's plot of its gpo-exact run is written: the trajectory, summary and plot of an
+    earlier demo stay as they were, all three, and nothing is left half written."""
+    names = ("sample_gpo_exact.tum", "sample_gpo_exact.summary.yaml", "sample_gpo_exact.png")
+    for name in names:
+        (tmp_path / name).write_text(f"an earlier demo's {name}\n")
+
+    def full(path):
+        Path(path).write_bytes(b"\x89PNG half")
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(gpo.cli.demo, "figure_writer", lambda figure, dpi: full)
+    expected = rf"{re.escape(str(tmp_path / names[2]))}: the disk is full .* the files already there are kept as"
+    with pytest.raises(OSError, match=expected):
+        gpo.cli.demo.sample_odometry(tmp_path)
+    assert {path.name: path.read_text() for path in tmp_path.iterdir()} == {
+        name: f"an earlier demo's {name}\n" for name in names
+    }
 
 
 def test_unknown_command_fails_with_usage():

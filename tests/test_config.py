@@ -249,3 +249,26 @@ def test_a_camchain_a_config_names_is_held_to_the_ranges_of_a_camera_written_inl
 
     with pytest.raises(ValueError, match=rf"rig\.yaml: camchain camchain\.yaml, cam0: {message}"):
         load_config(_document(tmp_path, by_file))
+
+
+def test_a_camchain_whose_cameras_are_named_by_numbers_is_named(tmp_path):
+    """A camchain whose cameras are keyed by numbers, not the camera the config names (the campaign, seeds
+    48707-48909: a TypeError joining the names)."""
+    camchain = yaml.safe_load(save_kalibr(tmp_path / "camchain.yaml", {"cam0": t265_rig().camera}).read_text())
+    (tmp_path / "camchain.yaml").write_text(yaml.safe_dump({2561302: camchain["cam0"]}))
+
+    def by_file(document):
+        del document["camera"]
+        document.update(camchain="camchain.yaml", camchain_camera="cam0")
+
+    with pytest.raises(ValueError, match=r"rig\.yaml: camchain_camera 'cam0' is not in camchain\.yaml \(2561302\)"):
+        load_config(_document(tmp_path, by_file))
+
+
+def test_a_wheelbase_shorter_than_the_reference_point_s_distance_names_the_file(tmp_path):
+    """The campaign (seeds 48707-48909) cut the wheelbase to 8e-91 m: in range, but shorter than l_r = 0.8 m."""
+    path = _document(tmp_path, lambda document: document["kinematics"].update(wheelbase_m=8e-91))
+    with pytest.raises(
+        ValueError, match=r"rig\.yaml: rear_to_reference_m \(l_r\) must lie between 0 and the wheelbase"
+    ):
+        load_config(path)

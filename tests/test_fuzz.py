@@ -10,13 +10,14 @@ the same inputs on every run. benchmarks/fuzz_campaign.py draws many more.
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 from fuzzing import TARGETS, Finding, examine
 from fuzzing.bags import bag_mutants
 from fuzzing.commands import run_process
-from fuzzing.harness import Mutant, Target
+from fuzzing.harness import Hang, Mutant, Target, time_limit
 from fuzzing.tum import tum_mutants
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -130,3 +131,15 @@ def test_the_campaign_takes_several_seeds_and_prints_each_targets_inputs_and_fin
         closing = next(line for line in lines if line.startswith(f"{name}: "))
         assert "8 inputs (seeds 7, 8)" in closing and "findings 0" in closing, closing
     assert lines[-1].startswith("16 inputs in ") and "traceback 0, hang 0, changed input 0, wrong result 0" in lines[-1]
+
+
+def test_a_hang_is_processor_time_or_a_read_waiting_far_longer():
+    """A machine busy with other work slows a read without making it hang: the limit is the reader's processor time,
+    and six times as long of wall time for a read that waits without working."""
+    with pytest.raises(Hang, match="processor"), time_limit(0.1):
+        while True:
+            pass
+    with time_limit(0.1):
+        time.sleep(0.3)  # waiting, not working, and within six times the limit
+    with pytest.raises(Hang, match="waited"), time_limit(0.1):
+        time.sleep(5)

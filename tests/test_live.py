@@ -205,10 +205,11 @@ def test_read_ahead_keeps_the_order_raises_in_place_and_stops_its_thread():
 DAY_NS = 86_400 * 10**9
 
 
-def _stream(config, mount, frames, tracking, refused=()) -> tuple[list, list]:
+def _stream(config, mount, frames, tracking, refused=(), before: int = 11) -> tuple[list, list]:
     """A LiveOdometer of ``config`` fed the frames and tracking messages in stamp order (a tracking message before a
     frame of its stamp), each call of ``refused`` (the odometer's method, its arguments, the words of its error) made
-    after the eleventh message; the floor records, and the x, y, theta of every fused pose settled."""
+    before message number ``before`` (counted from 0: by default after the eleventh message; 0, before the first); the
+    floor records, and the x, y, theta of every fused pose settled."""
     fused = []
     odometer = LiveOdometer(config, mount, on_fused=fused.append)
     messages = sorted(
@@ -218,17 +219,17 @@ def _stream(config, mount, frames, tracking, refused=()) -> tuple[list, list]:
     )
     records = []
     for number, (_, _, (kind, *arguments)) in enumerate(messages):
-        if kind == "step":
-            records.append(odometer.step(*arguments))
-        else:
-            odometer.track(*arguments)
-        if number == 10:
+        if number == before:
             for method, bad, words in refused:
                 with pytest.raises(RefusedMessage) as raised:
                     getattr(odometer, method)(*bad)
                     pytest.fail(f"{method} took {bad!r:.200}")
                 for word in words:
                     assert word in str(raised.value), f"{word!r} not in {raised.value}"
+        if kind == "step":
+            records.append(odometer.step(*arguments))
+        else:
+            odometer.track(*arguments)
     odometer.finish()
     return records, [tuple(pose.pose) for pose in fused]
 
@@ -274,11 +275,9 @@ def test_a_refused_frame_leaves_the_odometer_as_it_was(messages, method):
     assert sum(r.status == "measured" for r in records) >= 12
 
 
-def test_a_refused_tracking_message_leaves_the_fused_odometer_as_it_was(messages):
-    frames, tracking, mount = messages
-    frames = frames[:16]
-    tracking = [message for message in tracking if message[0] <= frames[-1][0] + STEP_NS]
-    config = load_config().replace(method="fused")
+def _bad_tracks(tracking) -> list:
+    """Calls of ``track`` with an argument that is no stamp, no position or no orientation, and the words of their
+    refusals."""
     stamp, position, orientation = tracking[40]
     bad_tracks = [
         ((stamp, position[:2], orientation), ["position", "3 numbers", "x, y, z"]),
@@ -291,10 +290,43 @@ def test_a_refused_tracking_message_leaves_the_fused_odometer_as_it_was(messages
         ((math.nan, position, orientation), ["stamp_ns", "nan"]),
         ((stamp + 2 * DAY_NS, position, orientation), ["stamp_ns", "more than a day"]),
     ]
-    refused = [("track", arguments, words) for arguments, words in bad_tracks] + _bad_steps(config, frames)
+    return [("track", arguments, words) for arguments, words in bad_tracks]
+
+
+def _fused_sources(messages) -> tuple[list, list, tuple]:
+    """The first 16 frames and the tracking messages up to one after the last of them, and the mount."""
+    frames, tracking, mount = messages
+    frames = frames[:16]
+    return frames, [message for message in tracking if message[0] <= frames[-1][0] + STEP_NS], mount
+
+
+def test_a_refused_tracking_message_leaves_the_fused_odometer_as_it_was(messages):
+    frames, tracking, mount = _fused_sources(messages)
+    config = load_config().replace(method="fused")
+    refused = _bad_tracks(tracking) + _bad_steps(config, frames)
     expected_records, expected = _stream(config, mount, frames, tracking)
     records, fused = _stream(config, mount, frames, tracking, refused)
     assert records == expected_records and fused == expected and len(fused) == 16
+
+
+@pytest.mark.parametrize("method", ["gpo-exact", "features", "fused"])
+def test_a_refused_first_message_leaves_the_odometer_as_it_was(messages, method):
+    """The bad calls before any message is taken, when the odometer has no frame to compare with yet (a None first
+    frame was taken by the features method, whose next frame then raised an AttributeError, and a NaN first stamp
+    made every pose NaN): the run after them gives the records and fused poses of the same messages without them. A
+    stamp more than a day after the last message is no refusal here: there is no last message yet."""
+    frames, tracking, mount = _fused_sources(messages)
+    config = load_config().replace(method=method)
+    tracking = tracking if method == "fused" else []
+    refused = [
+        call
+        for call in (_bad_tracks(tracking) if tracking else []) + _bad_steps(config, frames)
+        if "more than a day" not in call[2]
+    ]
+    expected_records, expected = _stream(config, mount, frames, tracking)
+    records, fused = _stream(config, mount, frames, tracking, refused, before=0)
+    assert records == expected_records and fused == expected and len(records) == 16
+    assert sum(record.status == "measured" for record in records) >= 12
 
 
 def test_a_tracking_pose_that_is_not_finite_is_dropped_and_counted(messages):

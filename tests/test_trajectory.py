@@ -1,6 +1,7 @@
 """Trajectories and TUM files: exact round trips, the real rpg_trajectory_evaluation files, bad input."""
 
 import re
+from decimal import Decimal
 
 import numpy as np
 import pytest
@@ -64,10 +65,14 @@ def test_reads_the_real_groundtruth_file(fetch_or_skip):
     run = "rpg_trajectory_evaluation/results/euroc_vislam_mono/laptop/vislam_ba/laptop_vislam_ba_V1_02"
     path = fetch_or_skip(f"{run}/stamped_groundtruth.txt")
     trajectory = Trajectory.read_tum(path)
-    first = next(line for line in path.read_text().splitlines() if not line.startswith("#")).split()
-    assert len(trajectory) == sum(1 for line in path.read_text().splitlines() if line and not line.startswith("#"))
-    assert trajectory.stamps_ns[0] == round(float(first[0]) * 1e9)
-    np.testing.assert_array_equal(trajectory.positions[0], [float(v) for v in first[1:4]])
+    rows = [line.split() for line in path.read_text().splitlines() if line and not line.startswith("#")]
+    assert len(trajectory) == len(rows)
+    # the stamps are written to the nanosecond (1.403715524907143116e+09): the exact nanoseconds are the text's
+    # decimal number times 1e9, which a float of seconds (53 bits, about 16 digits) cannot hold
+    expected = [Decimal(row[0]).scaleb(9) for row in rows]
+    assert all(stamp == stamp.to_integral_value() for stamp in expected)
+    assert trajectory.stamps_ns.tolist() == [int(stamp) for stamp in expected]
+    np.testing.assert_array_equal(trajectory.positions[0], [float(v) for v in rows[0][1:4]])
 
 
 @pytest.mark.parametrize(
@@ -79,6 +84,8 @@ def test_reads_the_real_groundtruth_file(fetch_or_skip):
         ("# t x y z qx qy qz qw\n2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", ":3: '1 0 0 0 0 0 0 1': the stamps go backwards"),
         ("1 0 0 0 0 0 0 1\n\n2 0 0 0 0 0 0 0\n", ":3: '2 0 0 0 0 0 0 0': the quaternion .* has zero length"),
         ("1 0 0 0 0 0 0 1\n2 nan 0 0 0 0 0 1\n", ":2: '2 nan 0 0 0 0 0 1': positions and quaternions must be finite"),
+        # found by the campaign (seeds 49111-49333): a length that overflows normalised every component to zero
+        ("1 0 0 0 0 0 0 1\n2 0 0 0 0 -6e158 0 1\n", ":2: '2 0 0 0 0 -6e158 0 1': the quaternion .* too long"),
     ],
 )
 def test_bad_tum_files_name_the_line_counted_from_one(tmp_path, content, message):

@@ -16,10 +16,7 @@ ROWS = (Row("camera"), Row("floor", "gpo", "ortho-gpi"), Row("fused", "gpo", "or
 PATHS = ("arc", "line")
 
 
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 def _truth(path: str) -> Trajectory:

@@ -13,11 +13,13 @@ from matplotlib.patches import StepPatch
 
 import gpo.book.ch08_floor_features
 from gpo.book.ch08_floor_features import (
+    draw_band_selection,
     draw_feature_matches,
     draw_invariance_loops,
     draw_keypoints,
     draw_match_histogram,
     feature_panel,
+    paper_value,
 )
 from gpo.motion.keypoints import FeatureParameters, FeatureTracker, detect, histogram_filter
 
@@ -25,10 +27,7 @@ SIZE = (320, 240)  # width, height
 NOISY = {"detector": "orb", "ratio": 1.0, "invariance_threshold": 0.95}  # wrong matches for both filters to reject
 
 
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 def _floor(seed=0) -> np.ndarray:
@@ -162,6 +161,12 @@ def test_loops_are_drawn_through_their_matches_start_points(frames, max_loops):
         for vertices, loop in zip(polygons[colour], loops, strict=False):
             np.testing.assert_allclose(vertices[: check.cardinality], start[loop])
     assert ax.get_title() == f"{kept} of {tried} loops kept, C = {check.cardinality}"
+    widths = {
+        tuple(collection.get_edgecolor()[0]): collection.get_linewidth()[0]
+        for collection in ax.collections
+        if isinstance(collection, PolyCollection)
+    }
+    assert widths[to_rgba("tab:red")] > widths[to_rgba("tab:green")]  # the few rejected loops stand out
 
 
 def test_loops_without_the_check(frames):
@@ -265,7 +270,7 @@ def test_panel_detects_once_per_detector(frames, monkeypatch):
 
 
 def test_the_histogram_decisions_are_drawn_by_band_and_scaled(frames):
-    from gpo.book.ch08_floor_features import draw_histogram_decisions
+    from gpo.book.lab_c_second_paper import draw_histogram_decisions
 
     matches = _matches(frames, **NOISY)
     orientation, length = matches.histogram
@@ -282,3 +287,35 @@ def test_the_histogram_decisions_are_drawn_by_band_and_scaled(frames):
     assert "centre of rotation" in {text.get_text() for text in ax.get_legend().get_texts()}
     far = draw_histogram_decisions(frames[1], matches, centre_px=(900.0, 120.0))
     assert "towards the centre of rotation, 740 px away" in {text.get_text() for text in far.get_legend().get_texts()}
+
+
+def test_the_band_selection_plots_each_match_where_it_starts_and_fits_both_slopes():
+    """Matches moving down the image, longer the further right they start (a turn's slope of 0.02): each group drawn
+    at (its start's u, its length), the band shaded, and the two least-squares lines labelled with their slopes."""
+    rng = np.random.default_rng(3)
+    start = np.column_stack([rng.uniform(150, 600, 80), rng.uniform(100, 380, 80)])
+    length = 15.0 + 0.02 * start[:, 0] + rng.normal(0, 0.2, 80)
+    end = start + np.column_stack([np.zeros(80), length])
+    end[:3] += [8.0, -9.0]  # three wrong matches
+    right = np.arange(80) >= 3
+    band = (20.0, 24.0)
+    kept = right & (length > band[0]) & (length < band[1])
+    ax = draw_band_selection(start, end, kept, right, band)
+    points = {line.get_label(): line for line in ax.lines if line.get_linestyle() == "None"}
+    kept_line = points[f"{kept.sum()} right, kept"]
+    np.testing.assert_allclose(kept_line.get_xdata(), start[kept, 0])  # across a motion down the image: u
+    np.testing.assert_allclose(kept_line.get_ydata(), length[kept])
+    assert f"{(right & ~kept).sum()} right, dropped" in points and "3 wrong" in points
+    fits = [line.get_label() for line in ax.lines if line.get_linestyle() == "-"]
+    slope = np.polyfit(start[right, 0], length[right], 1)[0]
+    assert fits[0] == f"least squares, the right ones: slope {slope:.4f}"
+    assert fits[1].startswith("least squares, the kept: slope ")
+    assert ax.patches[0].get_label() == "the length band"
+
+
+def test_the_papers_final_percent_is_drawn_from_its_own_columns():
+    from gpo.experiments.table2 import experiment
+
+    first = experiment("I").paper
+    assert paper_value(first, "final_error_percent") == pytest.approx(100 * 0.1098 / 17.83)
+    assert paper_value(first, "heading_rmse_deg") == first.heading_rmse_deg

@@ -10,11 +10,7 @@ from gpo.book.ch05_klt_flow import klt_flow_panel
 from gpo.book.ch06_kinematics import bicycle_panel, constant_steering_paths
 from gpo.odometry.kinematics import exact_velocities
 
-
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 def _texture(size=160, seed=0) -> np.ndarray:

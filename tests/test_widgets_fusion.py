@@ -16,10 +16,7 @@ from gpo.pipeline.run import FloorRun
 V, OMEGA, SECONDS = 0.3, 0.4, 2.0
 
 
-@pytest.fixture(autouse=True)
-def close_figures():
-    yield
-    plt.close("all")
+pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 
 def _arc(rate_hz: float, sigma=(0.0, 0.0), scale: float = 1.0, seed: int = 0) -> Trajectory:

@@ -16,10 +16,10 @@ REACH_TIMEOUT_S = 3.0  # the longest wait for its host to accept a connection at
 
 
 # Dask's nannies start workers with MALLOC_TRIM_THRESHOLD_=65536 (distributed.nanny.pre-spawn-environ), which turns
-# off glibc's adaptive mmap threshold: every image-sized array is then mapped and unmapped afresh. In
-# benchmarks/sweep_speed.py a run on a worker took 0.58 s with it, against 0.39 s one after another on one thread,
-# and 0.22 s against 0.24 s without it. A run keeps no memory between tasks that trimming would give back, so the
-# local cluster's workers start without it.
+# off glibc's adaptive mmap threshold: every image-sized array is then mapped and unmapped afresh. In one unsaved run
+# of benchmarks/sweep_speed.py a run on a worker took 0.58 s with it against 0.39 s one after another on one thread
+# (about 1.5 times as long), and 0.22 s against 0.24 s without it; the saved results hold no measurement of it. A run
+# keeps no memory between tasks that trimming would give back, so the local cluster's workers start without it.
 WORKER_ENVIRONMENT_UNSET = ("MALLOC_TRIM_THRESHOLD_",)
 
 
@@ -32,9 +32,9 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
     Dask is imported), or when the scheduler does not answer within ``CONNECT_TIMEOUT_S``.
 
     The local workers start without ``WORKER_ENVIRONMENT_UNSET``. Workers of a cluster given by its address keep
-    their own environment: started by ``dask worker`` they run the odometry up to 1.8x slower unless started with
-    ``--no-nanny`` or with a Dask config file that sets ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_``
-    to ``null``."""
+    their own environment: started by ``dask worker`` they may run the odometry markedly slower (about 1.5 times in
+    the one measurement noted at ``WORKER_ENVIRONMENT_UNSET``) unless started with ``--no-nanny`` or with a Dask config
+    file that sets ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_`` to ``null``."""
     address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
     if address:
         source = "--scheduler" if scheduler else "DASK_SCHEDULER_ADDRESS"

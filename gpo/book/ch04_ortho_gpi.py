@@ -1,6 +1,7 @@
-"""Chapter 04, the ortho-rectified GPI and the analytic route: the chessboard route's images, the ortho-GPI's extent
-and the analytic route's mount on sliders, and the analytic route on a real car's fisheyes (Kalibr's sample): its
-ground images and the road's lines fitted in them. The chapter's Table 1 is ``gpo.experiments.table1``."""
+"""Chapter 04, the ortho-rectified GPI and the analytic route: the chessboard route's images, Table 1 read from a
+figure, the ortho-GPI's extent and the analytic route's mount on sliders, and the analytic route on a real car's
+fisheyes (Kalibr's sample): its ground images and the road's lines fitted in them. The chapter's Table 1 is
+``gpo.experiments.table1``."""
 
 from __future__ import annotations
 
@@ -16,7 +17,13 @@ from gpo.book.figures import draw_floor_image
 from gpo.book.panels import slider
 from gpo.cameras.mount import floor_angles
 from gpo.cameras.rig import CameraMount
-from gpo.experiments.table1 import CALIBRATION_ERRORS, PAPER_TABLE1_ERRORS, PICK_ERROR_PX, paper_table1
+from gpo.experiments.table1 import (
+    CALIBRATION_ERRORS,
+    PAPER_TABLE1_ERRORS,
+    PICK_ERROR_PX,
+    paper_table1,
+    table1_placements,
+)
 from gpo.floor_image.analytic import analytic_table, route_difference
 from gpo.floor_image.gpi import ground_plane_image
 from gpo.floor_image.image import FloorImage, GroundImageError
@@ -181,7 +188,8 @@ def fit_road_lines(ground_image, floor: FloorImage = CAR_FLOORS["left"]) -> dict
 
 def draw_car_ground_images(car_images: dict, cars: dict, views: dict, lines: dict[str, RoadLine]) -> plt.Figure:
     """The Kalibr car's left fisheye, its ground image with the road's ``lines`` (``fit_road_lines``) drawn dashed,
-    and the front camera's ground image; ``views``: ``car_ground_images``."""
+    and the front camera's ground image with the left camera's lane marking drawn dashed over it, and the sun's
+    smear (a bright column of the front fisheye, bent by the ground map) named; ``views``: ``car_ground_images``."""
     fig, axes = plt.subplots(1, 3, figsize=(15, 6.5), gridspec_kw={"width_ratios": [1.6, 1, 1.1]})
     axes[0].imshow(car_images["left"], cmap="gray")
     axes[0].set_title("the left fisheye (1280 x 800)")
@@ -193,8 +201,29 @@ def draw_car_ground_images(car_images: dict, cars: dict, views: dict, lines: dic
         axes[1].plot(line.slope * ends + line.offset, ends, "--", lw=1, color=colour)
     axes[1].set_title("its ground image, lines fitted")
     draw_floor_image(views["front"], CAR_FLOORS["front"], ax=axes[2], axes_length=1.0)
+    lane = lines["lane marking"]
+    ahead = np.array(CAR_FLOORS["front"].extent[:2])
+    axes[2].plot(lane.slope * ahead + lane.offset, ahead, "--", lw=1, color="tab:red")
+    for text, (y, x), at, colour in (
+        ("the left camera's\nlane marking", (2.9, 4.6), (4.0, 2.4), "tab:red"),
+        ("the sun's smear", (-2.5, 5.6), (-1.2, 2.6), "tab:orange"),
+    ):
+        axes[2].annotate(
+            text, (y, x), at, color=colour, fontsize="small", arrowprops={"arrowstyle": "->", "color": colour}
+        )
     axes[2].set_title("the front camera's ground image")
     return fig
+
+
+def fisheye_pixel_on_floor(camera, mount: CameraMount, xy, step_m: float = 1e-4) -> tuple[float, float]:
+    """How much floor one fisheye pixel covers at the floor point ``xy`` of base_link, (across, along) millimetres:
+    a step of ``step_m`` across (y) and along (x) the floor, projected by ``camera`` from its ``mount``, over the
+    pixels it moves in the fisheye."""
+    x, y = xy
+    points = np.array([[x, y, 0.0], [x, y + step_m, 0.0], [x + step_m, y, 0.0]])
+    pixels, _ = camera.project(mount.to_camera(points))
+    across, along = np.linalg.norm(pixels[1:] - pixels[0], axis=1)
+    return 1e3 * step_m / float(across), 1e3 * step_m / float(along)
 
 
 def table1_errors_panel(seed: int = 0) -> widgets.VBox:
@@ -231,9 +260,55 @@ def table1_errors_panel(seed: int = 0) -> widgets.VBox:
         axes[1].set_title("its area")
         plt.tight_layout()
         for row in rows:
-            print(f"{row.image:>9}, {row.where:<6}: sides off {abs(row.long_mm - truth[0]):6.3f} and "
-                  f"{abs(row.short_mm - truth[1]):6.3f} mm, area {abs(row.area_mm2 - truth[2]):7.2f} mm^2")
+            print(
+                f"{row.image:>9}, {row.where:<6}: sides off {abs(row.long_mm - truth[0]):6.3f} and "
+                f"{abs(row.short_mm - truth[1]):6.3f} mm, area {abs(row.area_mm2 - truth[2]):7.2f} mm^2"
+            )
         plt.show()
 
     sliders = widgets.HBox(list(controls.values()), layout={"flex_flow": "row wrap"})
     return widgets.VBox([sliders, widgets.interactive_output(redraw, controls)])
+
+
+TABLE1_COLOURS = {"GPI": "tab:orange", "ortho-GPI": "tab:blue", "analytic": "tab:gray"}
+SUITE_PLACEMENTS = table1_placements()  # the placements reproduce_table1 measures by default
+TABLE1_FLOOR = 1e-3  # errors below this (a thousandth of a mm or mm^2) are drawn at it, on the log scale
+
+
+def draw_table1(truth, paper_rows, suite_rows, paper=PAPER_TABLE1_ERRORS) -> plt.Figure:
+    """Table 1 read from a figure: each measurement's error ((a + c) / 2, (b + d) / 2 in mm, S in mm^2) as bars on a
+    log scale, one group of bars per way of measuring it, each image in its colour: the paper's (``paper``, as it
+    prints them), the suite's under the paper's definitions (``truth`` and ``paper_rows`` from
+    ``gpo.experiments.table1.paper_table1``: the fitted placement, a second one, the mean over placements) and the
+    suite's own measure (``suite_rows`` from ``reproduce_table1``: the mean over its placements with the exact
+    calibration, then one placement's RMS error). Errors below ``TABLE1_FLOOR`` are drawn at it."""
+    groups = [("the paper, one frame", {image: paper[image] for image in ("GPI", "ortho-GPI")})]
+    titles = {"fitted": "fitted placement, one frame", "second": "second placement, one frame", "mean": "mean of 8"}
+    for where, title in titles.items():
+        values = {row.image: (row.long_mm, row.short_mm, row.area_mm2) for row in paper_rows if row.where == where}
+        groups.append((title, {image: np.abs(np.subtract(v, truth)) for image, v in values.items()}))
+    errors = {row.image: (row.long_error_mm, row.short_error_mm, row.area_error_mm2) for row in suite_rows}
+    groups.append((f"mean of {len(SUITE_PLACEMENTS)}, exact calibration", {k: np.abs(v) for k, v in errors.items()}))
+    singles = {
+        row.image: (row.single_side_rms_mm, row.single_side_rms_mm, row.single_area_rms_mm2) for row in suite_rows
+    }
+    groups.append(("one placement (RMS)", singles))
+    fig, axes = plt.subplots(1, 3, figsize=(14, 5.2), sharey=True)
+    for column, (ax, name) in enumerate(zip(axes, ("(a+c)/2 [mm]", "(b+d)/2 [mm]", "S [mm^2]"), strict=True)):
+        position, ticks = 0.0, []
+        for title, values in groups:
+            start = position
+            for image, measured in values.items():
+                ax.barh(position, max(measured[column], TABLE1_FLOOR), color=TABLE1_COLOURS[image], height=0.8)
+                position += 1
+            ticks.append(((start + position - 1) / 2, title))
+            position += 0.8
+        ax.set_xscale("log")
+        ax.set_xlim(TABLE1_FLOOR, None)
+        ax.set_xlabel(f"error of {name}, log scale")
+        ax.set_yticks([at for at, _ in ticks], [title for _, title in ticks])
+        ax.invert_yaxis()
+    handles = [plt.Rectangle((0, 0), 1, 1, color=colour) for colour in TABLE1_COLOURS.values()]
+    axes[-1].legend(handles, list(TABLE1_COLOURS), loc="lower right", fontsize="small")
+    fig.tight_layout()
+    return fig

@@ -112,6 +112,29 @@ def draw_vector_errors(errors, outliers, frames) -> plt.Axes:
     return ax
 
 
+COASTING_COLOURS = {"coasted": "tab:orange", "held": "tab:red"}
+
+
+def draw_coasting(times_s, driven_m, odometry_m, statuses) -> plt.Axes:
+    """The distance driven against time, the truth's (``driven_m``) and the odometry's (``odometry_m``), metres, at
+    ``times_s`` (N,), through frames that could not be measured: each run of frames whose status (``statuses``, N
+    strings) is "coasted" or "held" shaded in its colour (``COASTING_COLOURS``)."""
+    _, ax = plt.subplots(figsize=(10, 3.4))
+    times_s, statuses = np.asarray(times_s), np.asarray(statuses)
+    half = 0.5 * np.median(np.diff(times_s))
+    for status, colour in COASTING_COLOURS.items():
+        runs = np.flatnonzero(np.diff(np.r_[0, (statuses == status).astype(int), 0])).reshape(-1, 2)
+        for first, end in runs:
+            ax.axvspan(times_s[first] - half, times_s[end - 1] + half, color=colour, alpha=0.25, lw=0)
+        ax.fill_between([], [], color=colour, alpha=0.25, label=f"frames {status}")
+    ax.plot(times_s, driven_m, color="k", lw=4, alpha=0.25, label="truth")
+    ax.plot(times_s, odometry_m, ".-", color=FLOW_COLOURS["median"], ms=4, lw=1, label="odometry")
+    ax.set(xlabel="time [s]", ylabel="driven forward [m]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small", loc="upper left")
+    return ax
+
+
 def draw_table3(paper, ours, columns) -> plt.Figure:
     """The first paper's Table 3 beside the suite's: for each of ``columns`` (the tests, then their average), the
     average relative translation error with the mean and with the median vector as bars, the minimum to the maximum

@@ -1,6 +1,9 @@
 """Chapter 08, the second paper's floor feature odometer: a recording's frames, keypoints, matches by fate, the
-histogram filter and the invariance check's loops, and the odometer's panel on one frame pair (the chapter's Table 2
-is ``gpo.experiments.table2``)."""
+histogram filter and the invariance check's loops, how the mu +- sigma bands select in a turn, the calibration's
+errors, the tilt's cost over the image, heading errors along a path, what each stage is worth, Table 2's short form
+on three floors beside the paper's rows, the keypoints each floor gives, and the odometer's panel on one frame pair.
+The second paper's experiments and the ablation from its published method are lab C's
+(``gpo.book.lab_c_second_paper``)."""
 
 from __future__ import annotations
 
@@ -124,8 +127,8 @@ def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.A
     """The loops of the invariance check (the second paper's Algorithm 1, its Figs. 7-8) of a
     ``gpo.motion.keypoints.FeatureMatches`` on the previous grey frame (H, W): each a closed polygon through its
     matches'
-    start points, pixels of the full image, kept loops green and rejected ones red, at most ``max_loops`` of each
-    (the first tried). When the check did not run, only the frame."""
+    start points, pixels of the full image, kept loops green and rejected ones red (drawn thicker), at most
+    ``max_loops`` of each (the first tried). When the check did not run, only the frame."""
     ax = _frame(image, ax)
     check = matches.invariance
     if check is None:
@@ -133,9 +136,9 @@ def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.A
         return ax
     start = matches.matched[0][np.flatnonzero(matches.histogram_kept)]  # the check's input, which its loops index
     loops = np.array(check.loops, dtype=int).reshape(-1, check.cardinality)
-    for kept, colour, name in ((True, "tab:green", "kept"), (False, "tab:red", "rejected")):
+    for kept, colour, name, width in ((True, "tab:green", "kept", 0.8), (False, "tab:red", "rejected", 2.0)):
         shown = loops[check.kept_loops == kept][:max_loops]
-        polygons = PolyCollection(start[shown], closed=True, facecolors="none", edgecolors=colour, lw=0.8)
+        polygons = PolyCollection(start[shown], closed=True, facecolors="none", edgecolors=colour, lw=width)
         polygons.set_label(f"{len(shown)} {name} loops shown")
         ax.add_collection(polygons)
     ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
@@ -143,52 +146,164 @@ def draw_invariance_loops(image, matches, ax=None, max_loops: int = 60) -> plt.A
     return ax
 
 
-HISTOGRAM_FATES = {  # which histogram dropped a match -> its colour
-    "dropped by the orientation band": "tab:red",
-    "dropped by the length band": "tab:orange",
-    "kept by both bands": "tab:green",
-}
+def draw_band_selection(start, end, kept, right, band: tuple[float, float], ax=None) -> plt.Axes:
+    """How the length band of the histogram filter selects in a turn: each match's vector length (px) against where
+    it starts across the motion (its start (M, 2) projected on the normal of the kept vectors' mean direction: its u
+    for a motion down the image), the right matches kept by the filters (``kept`` (M,) bool) green, the right ones
+    dropped grey, the wrong ones (``right`` (M,) False) red; the band (low, high) of lengths shaded, and a least-squares
+    line through the right matches and one through the kept, each labelled with its slope (px of length per px
+    across: about the turn, in radians)."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(9, 4))
+    start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    vectors = end - start
+    mean = vectors[kept].mean(axis=0)
+    normal = np.array([mean[1], -mean[0]]) / np.hypot(*mean)
+    across, length = start @ normal, np.hypot(*vectors.T)
+    ax.axhspan(*band, color="tab:green", alpha=0.1, label="the length band")
+    groups = (
+        (right & ~kept, "0.55", "right, dropped"),
+        (right & kept, "tab:green", "right, kept"),
+        (~right, "tab:red", "wrong"),
+    )
+    for chosen, colour, name in groups:
+        ax.plot(across[chosen], length[chosen], ".", color=colour, ms=6, label=f"{chosen.sum()} {name}")
+    reach = np.array([across[right].min(), across[right].max()])
+    for chosen, colour, name in ((right, "k", "the right ones"), (right & kept, "tab:green", "the kept")):
+        slope, offset = np.polyfit(across[chosen], length[chosen], 1)
+        ax.plot(reach, slope * reach + offset, color=colour, lw=1.2, label=f"least squares, {name}: slope {slope:.4f}")
+    low, high = np.percentile(length[right], [0, 100])
+    ax.set_ylim(low - 0.3 * (high - low), high + 0.15 * (high - low))
+    ax.set_xlabel("where the match starts, across the motion [px]")
+    ax.set_ylabel("length of the match vector [px]")
+    ax.legend(fontsize="small", loc="lower right", ncols=2)
+    return ax
 
 
-def draw_histogram_decisions(image, matches, ax=None, scale: float = 5.0, centre_px=None) -> plt.Axes:
-    """The histogram filter's decisions (the second paper's mu +- sigma bands) on the grey frame (H, W): each match
-    vector of a ``gpo.motion.keypoints.FeatureMatches`` drawn from its start, ``scale`` times its length, coloured by
-    ``HISTOGRAM_FATES``. ``centre_px`` (u, v), pixels: the centre of the frame pair's rotation, marked with a cross,
-    or when outside the frame, an arrow from the frame's centre towards it. When the filter did not run, only the
-    frame."""
-    ax = _frame(image, ax)
-    if matches.histogram is None:
-        ax.set_title("the histogram filter did not run")
-        return ax
-    start, end = matches.matched
-    orientation, length = matches.histogram
-    by_length = length.kept if length is not None else np.zeros(len(start), bool)
-    fates = {
-        "dropped by the orientation band": ~orientation.kept,
-        "dropped by the length band": orientation.kept & ~by_length,
-        "kept by both bands": by_length,
-    }
-    for fate, chosen in fates.items():
-        tips = start[chosen] + scale * (end[chosen] - start[chosen])
-        lines = LineCollection(np.stack([start[chosen], tips], axis=1), colors=HISTOGRAM_FATES[fate], lw=1.2)
-        lines.set_label(f"{chosen.sum()} {fate}")
-        ax.add_collection(lines)
-        ax.plot(*tips.T, ".", ms=3, color=HISTOGRAM_FATES[fate])
-    if centre_px is not None:
-        height, width = image.shape
-        centre = np.asarray(centre_px, dtype=float)
-        if 0 <= centre[0] < width and 0 <= centre[1] < height:
-            ax.plot(*centre, "x", ms=12, mew=2.5, color="tab:blue", label="centre of rotation")
-        else:
-            middle = np.array([width / 2, height / 2])
-            towards = (centre - middle) / np.linalg.norm(centre - middle) * 0.3 * min(width, height)
-            ax.annotate(
-                "", xy=middle + towards, xytext=middle, arrowprops={"arrowstyle": "->", "color": "tab:blue", "lw": 2}
-            )
-            away = np.hypot(*(centre - middle))
-            ax.plot([], [], color="tab:blue", lw=2, label=f"towards the centre of rotation, {away:.0f} px away")
-    ax.legend(loc="lower right", fontsize="small", framealpha=0.8)
-    ax.set_title(f"the match vectors, {scale:g} times their length")
+def draw_calibration_errors(errors: dict, ax=None) -> plt.Axes:
+    """Each fitted parameter's error (parameter name -> error / its standard deviation) as a bar, with the bands
+    of one and two standard deviations shaded: where a calibration's errors should lie."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 3))
+    names = list(errors)
+    ax.axhspan(-2, 2, color="tab:green", alpha=0.08, label="within 2 standard deviations")
+    ax.axhspan(-1, 1, color="tab:green", alpha=0.15, label="within 1")
+    ax.bar(names, [errors[name] for name in names], color="tab:blue")
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_ylim(-3, 3)
+    ax.set_ylabel("error / standard deviation")
+    ax.legend(loc="upper right", fontsize="small")
+    return ax
+
+
+def draw_step_lengths(pixels, lengths_mm, size: tuple[int, int], ax=None) -> plt.Axes:
+    """A floor step measured at pixels (N, 2) all over a ``size`` (width, height) image, each dot coloured by the
+    length read there (mm), with a colour bar."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8.5, 4.5))
+    dots = ax.scatter(*np.asarray(pixels).T, c=lengths_mm, cmap="coolwarm", s=60)
+    ax.set_xlim(0, size[0])
+    ax.set_ylim(size[1], 0)
+    ax.set_aspect("equal")
+    ax.set_xlabel("u [px]")
+    ax.set_ylabel("v [px]")
+    ax.figure.colorbar(dots, ax=ax, label="the step read [mm]")
+    return ax
+
+
+def heading_error_deg(trajectory, truth) -> np.ndarray:
+    """The heading error (degrees, unwrapped) of ``trajectory`` at each of its poses against ``truth`` at the nearest
+    stamp not before it, both counted from their first pose."""
+    true_yaw = np.unwrap(truth.yaw)
+    index = np.minimum(np.searchsorted(truth.stamps_ns, trajectory.stamps_ns), len(true_yaw) - 1)
+    yaw = np.unwrap(trajectory.yaw)
+    return np.degrees((yaw - yaw[0]) - (true_yaw[index] - true_yaw[0]))
+
+
+def draw_heading_errors(paths: dict, truth, ax=None) -> plt.Axes:
+    """The heading error (degrees) against time (seconds from the start) of each trajectory of ``paths`` (label ->
+    ``gpo.io.trajectory.Trajectory``) against ``truth``."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(10, 3.6))
+    for label, trajectory in paths.items():
+        ax.plot(trajectory.times - trajectory.times[0], heading_error_deg(trajectory, truth), label=label)
+    ax.axhline(0, color="k", lw=0.6)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("heading error [deg]")
+    ax.legend(fontsize="small")
+    return ax
+
+
+def draw_stage_worth(measures: dict, axes=None) -> np.ndarray:
+    """What each variant of the odometer (label -> ``gpo.metrics.Evaluation.measures()``) ends at: its final error
+    (mm) and its heading RMSE (degrees) as horizontal bars on log scales, the first variant at the top."""
+    if axes is None:
+        _, axes = plt.subplots(1, 2, figsize=(12, 3.4), sharey=True)
+    labels = list(measures)[::-1]
+    columns = (("final_error_mm", "final error [mm]"), ("heading_rmse_deg", "heading RMSE [deg]"))
+    for ax, (key, label) in zip(axes, columns, strict=True):
+        ax.barh(labels, [measures[name][key] for name in labels], color="tab:blue")
+        ax.set_xscale("log")
+        ax.set_xlabel(label)
+        ax.grid(True, axis="x", which="both", alpha=0.3)
+    return axes
+
+
+PAPER_FLOORS = {"wood": ("I", "II"), "raised": ("III",), "industrial": ("IV", "V", "VI", "VII", "VIII", "IX")}
+"""The second paper's experiments on each kind of floor (its Table 1)."""
+
+
+def paper_value(row, key: str) -> float:
+    """A column ``key`` of one of the paper's rows of Table 2 (a ``gpo.metrics.PaperTable2``), the final error in %
+    (``final_error_percent``) computed from its own columns, 100 e_N / distance: the paper's printed % is that only
+    for its IV."""
+    if key == "final_error_percent":
+        return row.final_error_mm / row.distance_m / 10.0
+    return getattr(row, key)
+
+
+def draw_table2_floors(rows: dict, paper: dict, axes=None, label: str = "the suite") -> np.ndarray:
+    """Table 2's final error (% of the distance) and heading RMSE (degrees) of the suite's run on each floor
+    (floor -> ``gpo.metrics.PaperTable2``), a bar per floor, beside the paper's own rows for the experiments on
+    that floor (number -> ``PaperTable2``, ``PAPER_FLOORS``; the final error as ``paper_value`` computes it), each a
+    labelled black dot; log scales. ``label`` names the suite's bars."""
+    if axes is None:
+        _, axes = plt.subplots(1, 2, figsize=(12, 3.8))
+    columns = (("final_error_percent", "final error [% of the distance]"), ("heading_rmse_deg", "heading RMSE [deg]"))
+    for ax, (key, name) in zip(axes, columns, strict=True):
+        floors = list(rows)
+        ax.bar(floors, [getattr(rows[floor], key) for floor in floors], color="tab:blue", label=label)
+        shown = False
+        for place, floor in enumerate(floors):
+            numbers = [n for n in PAPER_FLOORS[floor] if np.isfinite(paper_value(paper[n], key))]
+            for offset, number in zip(np.linspace(-0.35, 0.35, max(len(numbers), 1)), numbers, strict=False):
+                value = paper_value(paper[number], key)
+                dots = "the paper's Table 2 (final error: e_N / distance)"
+                ax.plot(place + offset, value, "ko", ms=5, label=None if shown else dots)
+                ax.annotate(number, (place + offset, value), xytext=(3, 3), textcoords="offset points", fontsize=8)
+                shown = True
+        ax.set_yscale("log")
+        bottom, top = ax.get_ylim()
+        ax.set_ylim(bottom, top * 4)  # room above the dots for their labels and the legend
+        ax.set_ylabel(name)
+    axes[0].legend(fontsize="small", loc="upper center")
+    return axes
+
+
+def draw_keypoint_counts(counts: dict, ax=None) -> plt.Axes:
+    """Keypoints found in one frame of each floor at each contrast threshold ((floor, threshold) -> count), grouped
+    by floor."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 3.4))
+    floors = list(dict.fromkeys(floor for floor, _ in counts))
+    thresholds = list(dict.fromkeys(threshold for _, threshold in counts))
+    width = 0.8 / len(thresholds)
+    for k, threshold in enumerate(thresholds):
+        places = np.arange(len(floors)) + (k - (len(thresholds) - 1) / 2) * width
+        ax.bar(places, [counts[floor, threshold] for floor in floors], width, label=f"contrast threshold {threshold}")
+    ax.set_xticks(range(len(floors)), floors)
+    ax.set_ylabel("keypoints in the frame")
+    ax.legend(fontsize="small")
     return ax
 
 

@@ -32,13 +32,16 @@ def command(*arguments) -> None:
     print(f"(exit code {finished.returncode})")
 
 
-def mistaken_mounts(mount: CameraMount) -> dict[str, CameraMount]:
-    """``mount`` as measured and with the mistakes people make: squares 25 mm taken for 20 mm (every length, the
-    height included, 1.25 times), the pitch 1 or 3 degrees off, the roll 3 degrees off."""
+def mistaken_mounts(mount: CameraMount, board_xy: tuple[float, float]) -> dict[str, CameraMount]:
+    """``mount`` as measured from a board whose corner lies at ``board_xy`` (metres in base_link, as ``gpo mount --at``
+    was told), and with the mistakes people make: squares of 25 mm taken for 20 mm (the board's pose in the camera
+    1.25 times further off, so the camera's place 1.25 times further from the board's corner: its height, and its x and
+    y about the corner), the pitch 1 or 3 degrees off, the roll 3 degrees off."""
     roll, pitch, yaw = mount.body_rpy
+    corner = np.array([*board_xy, 0.0])
 
     def tilted(d_roll_deg=0.0, d_pitch_deg=0.0, scale=1.0) -> CameraMount:
-        position = mount.position * [1.0, 1.0, scale]
+        position = corner + scale * (mount.position - corner)
         return CameraMount.from_rpy(position, roll + np.radians(d_roll_deg), pitch + np.radians(d_pitch_deg), yaw)
 
     return {
@@ -61,10 +64,13 @@ class MistakenRun:
     travelled_m: float
 
 
-def mistaken_runs(bag, config: OdometryConfig, truth: Trajectory) -> dict[str, MistakenRun]:
-    """``config`` run on ``bag`` with each of ``mistaken_mounts`` of its mount, each against ``truth``."""
+def mistaken_runs(
+    bag, config: OdometryConfig, truth: Trajectory, board_xy: tuple[float, float]
+) -> dict[str, MistakenRun]:
+    """``config`` run on ``bag`` with each of ``mistaken_mounts`` of its mount (measured from a board whose corner
+    lies at ``board_xy``), each against ``truth``; the config's floor image and lever stay as they are."""
     runs = {}
-    for name, mount in mistaken_mounts(config.rig.mount).items():
+    for name, mount in mistaken_mounts(config.rig.mount, board_xy).items():
         wrong = config.replace(rig=dataclasses.replace(config.rig, mount=mount))
         trajectory = run(bag, wrong, progress=False).trajectory
         travelled = float(np.sum(np.linalg.norm(np.diff(trajectory.positions[:, :2], axis=0), axis=1)))

@@ -52,6 +52,10 @@ chosen so that the first row points as far to the right of the image as possible
 
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -84,6 +88,10 @@ VIEW_FLAGS = cv2.CALIB_CB_ACCURACY  # the sector detector in a perspective view:
 VIEW_FIELD_OF_VIEW = np.radians(90.0)
 SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-3)
 GRID_TOLERANCE = 2.0  # see forms_grid
+REMEMBERED = 512
+"""How many of the detector's answers one process keeps (``_remembered``)."""
+_ANSWERS: OrderedDict[tuple, np.ndarray | None] = OrderedDict()
+_ANSWERS_LOCK = threading.Lock()
 
 
 def find_corners(
@@ -103,11 +111,14 @@ def find_corners(
     grey = _checked_grey(image, camera)
     if rectify and camera is None:
         raise ValueError("the perspective views (rectify=True) need a camera model")
+    pattern_size = tuple(pattern_size)
     corners = None
     if rectify is not True:
-        corners = _find_in_picture(grey, pattern_size, search)
+        corners = _remembered(
+            grey, ("picture", pattern_size, search), lambda: _find_in_picture(grey, pattern_size, search)
+        )
     if corners is None and rectify is not False and camera is not None:
-        corners = _find_in_views(grey, pattern_size, camera)
+        corners = _remembered(grey, ("views", pattern_size, camera), lambda: _find_in_views(grey, pattern_size, camera))
     if corners is None:
         return None
     if search.refine:
@@ -294,6 +305,26 @@ def pattern_hint(images: list[np.ndarray], pattern_size: tuple[int, int], names:
         f"squares, give --board {pattern_text(found)}; if {given} is right, the board is partly hidden or cut off in "
         "the views, and a part of it gives a wrong calibration"
     )
+
+
+def _remembered(grey: np.ndarray, question: tuple, find: Callable[[], np.ndarray | None]) -> np.ndarray | None:
+    """``find()``, the detector's answer to ``question`` on the image ``grey``, or the answer it gave before in this
+    process (the last ``REMEMBERED`` answers are kept, named by a digest of the image, not the image): calibrating one
+    set of views with another camera model, or the mount's chapter redrawn, finds the corners without running the
+    detector again. A copy, so that a caller's changes stay its own."""
+    key = (hashlib.blake2b(grey.tobytes(), digest_size=16).digest(), grey.shape, question)
+    with _ANSWERS_LOCK:
+        known = key in _ANSWERS
+        if known:
+            _ANSWERS.move_to_end(key)
+            corners = _ANSWERS[key]
+    if not known:
+        corners = find()
+        with _ANSWERS_LOCK:
+            _ANSWERS[key] = corners
+            while len(_ANSWERS) > REMEMBERED:
+                _ANSWERS.popitem(last=False)
+    return None if corners is None else corners.copy()
 
 
 def _checked_grey(image: np.ndarray, camera: CameraModel | None) -> np.ndarray:

@@ -109,6 +109,10 @@ def read_yaml(path) -> Any:
         if str(path) in str(error):
             raise
         raise ValueError(f"{path}: not valid YAML: {error}") from None
+    except (IndexError, KeyError, AttributeError):  # PyYAML's builders of an empty !!int, !!float, !!bool, !!timestamp
+        raise ValueError(
+            f"{path}: not valid YAML: a value tagged !!int, !!float, !!bool or !!timestamp is empty or not of its type"
+        ) from None
     finally:
         if loader is not None:
             loader.dispose()

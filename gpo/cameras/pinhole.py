@@ -6,6 +6,7 @@ OpenCV's ``projectPoints`` model with (k1, k2, p1, p2[, k3]).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -36,6 +37,16 @@ def radtan_coeffs(distortion: str, coeffs: list[float], where: str) -> tuple[flo
     return tuple(coeffs)
 
 
+@functools.lru_cache(maxsize=256)
+def _max_radius(coefficients: tuple[float, float, float, float, float]) -> float:
+    """``RadialTangential.max_radius`` of (k1, k2, p1, p2, k3), found once for each lens (a camera asks at every
+    projection)."""
+    k1, k2, _, _, k3 = coefficients
+    roots = np.roots(np.trim_zeros([7.0 * k3, 5.0 * k2, 3.0 * k1, 1.0], "f"))
+    positive = [s.real for s in roots if abs(s.imag) < 1e-12 and s.real > 0]
+    return math.sqrt(min(positive)) if positive else math.inf
+
+
 class RadialTangential:
     """OpenCV's radial-tangential distortion on the normalised image plane, shared by `Pinhole` and `Omni`.
 
@@ -61,10 +72,7 @@ class RadialTangential:
         The radial map r -> r (1 + k1 r^2 + k2 r^4 + k3 r^6) stops growing at the smallest
         positive root s = r^2 of 1 + 3 k1 s + 5 k2 s^2 + 7 k3 s^3; infinite when there is none.
         """
-        k1, k2, _, _, k3 = self._coefficients
-        roots = np.roots(np.trim_zeros([7.0 * k3, 5.0 * k2, 3.0 * k1, 1.0], "f"))
-        positive = [s.real for s in roots if abs(s.imag) < 1e-12 and s.real > 0]
-        return math.sqrt(min(positive)) if positive else math.inf
+        return _max_radius(self._coefficients)
 
     def _distort(self, xn: np.ndarray, yn: np.ndarray):
         """Distorted normalised coordinates (xd, yd) of (xn, yn), and their Jacobian.

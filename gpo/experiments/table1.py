@@ -179,8 +179,9 @@ pixel image); the GPI's are off by tenths of a millimetre to millimetres, and sc
 AREA_DECIMALS = 0
 """Decimals (mm^2) of the area in ``format_paper_table1``: one frame's area scatters by a few mm^2."""
 CALIBRATION_ERRORS = {"fx": -0.00088, "fy": -0.00163, "cx": -0.724, "cy": 0.168, "alpha": 0.001, "beta": -0.006}
-"""The calibration's errors: fx, fy relative, cx, cy pixels, alpha, beta absolute; those chapter
-``01_eucm_calibration`` prints for its calibration from views with 0.3 px of corner noise."""
+"""The calibration's errors: fx, fy relative, cx, cy pixels, alpha, beta absolute; those of chapter
+``01_eucm_calibration``'s calibration from views with 0.3 px of corner noise (its section "How close to the truth?"
+plots them in standard deviations)."""
 PICK_ERROR_PX = 2.0
 """Standard deviation (pixels, each coordinate, seeded) of the four corners picked by hand in the front face for
 eq. 22, as the paper selects them."""

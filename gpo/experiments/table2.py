@@ -18,9 +18,9 @@ Every row also carries the same run against the simulator's continuous truth (``
 A run (``experiment_run``) reads every frame of a long recording, up to a few minutes for IX; each is kept on disk
 under ``$GPO_CACHE_DIR/runs``, keyed by the recording (whose name holds the simulator's fingerprint, so the rests
 of a stepped plan too), the frames used (all or at rest), the whole config and the source of every module a run
-goes through, so that ``python -m gpo table2`` computes them once (as ``python -m gpo table4``
-does for the first paper's table) and chapter 08 reads them back; it also keeps chapter 08's runs over the three
-floors (``floor_runs``).
+goes through, so that ``python -m gpo table2`` computes them once (as ``python -m gpo table4`` does for the first
+paper's table) and lab C's module (``python -m gpo.book.lab_c_second_paper``) reads them back; it also keeps chapter
+08's runs over the three floors (``floor_runs``).
 """
 
 from __future__ import annotations

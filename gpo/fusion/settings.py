@@ -46,8 +46,8 @@ class FusionSettings:
     The floor: each step's mean velocity scatters by ``floor_speed_sigma_mps`` and ``floor_turn_sigma_radps`` when
     its flow kept ``floor_reference_inliers`` inlier vectors that spread by ``floor_reference_spread_px``: a median of
     n vectors spread by s scatters as q = s / sqrt(n), and the variance is the reference's times (1 + (q / q_ref)^2) / 2
-    (``floor_variance_scale``; on the sample's analytic floor image the steps' scatter against the truth grows with q
-    so, 0.36 mm/s and 0.3 mrad/s at the best third of q, 1.1 mm/s and 1.4 mrad/s at the worst). A step without a
+    (``floor_variance_scale``; on the sample the steps' scatter against the truth grows with q so, as lab F prints:
+    0.55 mm/s and 0.47 mrad/s at the best third of q, 2.53 mm/s and 2.28 mrad/s at the worst). A step without a
     spread (the features method) counts as the reference.
     The tracking camera, as its maker would specify it: random walks of position and heading
     (``tracking_position_walk_m_per_sqrt_s``, ``tracking_yaw_walk_rad_per_sqrt_s``), white jitter on each pose
@@ -89,7 +89,7 @@ class FusionSettings:
 
     def _ranges(self) -> dict[str, tuple[bool, str]]:
         """Each number: whether it lies in the range a real rig's sensors have, and that range with its unit. The
-        tracking camera's walks reach 5 m/sqrt(s) and 1 rad/sqrt(s): chapter 07's camera that is not to be trusted."""
+        tracking camera's walks reach 5 m/sqrt(s) and 1 rad/sqrt(s): lab F's camera that is not to be trusted."""
         sigma = {"floor_speed_sigma_mps": " m/s", "floor_turn_sigma_radps": " rad/s", "tracking_jitter_m": " m",
                  "tracking_jitter_rad": " rad", "tracking_scale_sigma": ", a share of the distance",
                  "tracking_yaw_bias_sigma_radps": " rad/s", "tracking_scale_walk_per_sqrt_s": " per sqrt(s)",

@@ -31,6 +31,7 @@ images are read-only views of the message buffer (no copy): copy one before draw
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import logging
 import sqlite3
@@ -75,29 +76,13 @@ _TO_GRAY = {
 }
 _FROM_BGR = {("bgr8", "rgb8"): cv2.COLOR_BGR2RGB, ("bgra8", "rgba8"): cv2.COLOR_BGRA2RGBA}
 
-_DAMAGED = (
-    AnyReaderError,
-    rosbag1.ReaderError,
-    rosbag2.ReaderError,
-    ValueError,
-    KeyError,
-    IndexError,
-    TypeError,
-    AttributeError,
-    AssertionError,
-    OverflowError,
-    EOFError,
-    MemoryError,
-    RecursionError,
-    struct.error,
-    sqlite3.Error,
-    apsw.Error,
-)
-"""What rosbags raises reading the bytes of a damaged bag (cut short, bits flipped, records out of order, a topic
-declaring another type than its messages hold; found by tests/fuzzing), each turned into a ValueError naming the bag.
-A MemoryError comes of a length field read as gigabytes, a RecursionError of a ROS 2 ``metadata.yaml`` nested
-thousands deep; a ROS 2 sqlite3 database is read through apsw, whose errors (``CorruptError``: "database disk image is
-malformed") are not sqlite3's."""
+_READERS = (AnyReaderError, rosbag1.ReaderError, rosbag2.ReaderError, sqlite3.Error, apsw.Error, struct.error)
+_MISREAD = (ValueError, KeyError, IndexError, TypeError, AttributeError, AssertionError, OverflowError, EOFError)
+_DAMAGED = (*_READERS, *_MISREAD, MemoryError, RecursionError)
+"""What rosbags (and apsw, through which it reads a ROS 2 sqlite3 database) raises reading the bytes of a damaged bag
+(cut short, bits flipped, records out of order, a topic declaring another type than its messages hold; found by
+tests/fuzzing), each turned into a ValueError naming the bag: a MemoryError comes of a length read as gigabytes, a
+RecursionError of a ROS 2 ``metadata.yaml`` nested hundreds deep."""
 
 
 class StampWarning(UserWarning):
@@ -153,15 +138,18 @@ class Recording:
             raise ValueError(f"{self.path} holds no messages: expected a recording with at least one")
 
     def _check_index(self) -> None:
-        """Each topic named by text, of a type named by text, counted by a whole number, and the first and last
-        times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say otherwise."""
+        """Topics named by text, of types named by text, they and all messages counted by whole numbers from 0, the
+        first and last times whole numbers of nanoseconds: a damaged ROS 2 ``metadata.yaml`` may say otherwise."""
         problem = None
+        for count in (reader.message_count for reader in self.reader.readers):
+            if not (type(count) is int and count >= 0):  # no flag, no text
+                problem = f"it counts {count!r:.30} messages; expected a whole number from 0"
         for connection in self.reader.connections:
-            fields = (connection.topic, connection.msgtype, connection.msgcount)
-            if not (isinstance(fields[0], str) and isinstance(fields[1], str) and isinstance(fields[2], int)):
+            name, kind, count = connection.topic, connection.msgtype, connection.msgcount
+            if not (isinstance(name, str) and isinstance(kind, str) and type(count) is int and count >= 0):
                 problem = (
-                    f"a topic {fields[0]!r:.60} of type {fields[1]!r:.60} with {fields[2]!r:.20} messages; "
-                    "expected names and a count"
+                    f"a topic {name!r:.60} of type {kind!r:.60} with {count!r:.20} messages; "
+                    "expected names and a count, a whole number from 0"
                 )
         times = (self.reader.start_time, self.reader.end_time)
         if not all(isinstance(time, int) and -(2**63) <= time < 2**63 for time in times):
@@ -171,8 +159,10 @@ class Recording:
             raise ValueError(f"{self.path} is damaged: {problem}.{_repair_hint(self.path)}")
 
     def close(self) -> None:
-        """Close the recording's files."""
-        self.reader.close()
+        """Close the recording's files. A damaged ROS 2 ``metadata.yaml`` (its ``files`` no list) makes rosbags fail as
+        it closes: what was read stands, and the files close as the reader is let go."""
+        with contextlib.suppress(*_DAMAGED):
+            self.reader.close()
 
     def __enter__(self) -> Recording:
         return self
@@ -546,14 +536,12 @@ def _trajectory(poses: list, context: str) -> Trajectory:
             stacklevel=3,
         )
     keep = np.delete(order, repeated)
-    frame_id, child_frame_id = frame_pairs[0]
-    return Trajectory(
-        stamps[keep],
-        np.array(positions)[keep],
-        np.array(quaternions)[keep],
-        frame_id,
-        "base_link" if child_frame_id is None else child_frame_id,
-    )
+    frame_id, child = frame_pairs[0]
+    try:  # what Trajectory refuses of finite poses (a quaternion of zero length) is named with the bag and topic
+        return Trajectory(stamps[keep], np.array(positions)[keep], np.array(quaternions)[keep], frame_id,
+                          "base_link" if child is None else child)
+    except ValueError as error:
+        raise ValueError(f"{context}: {error}") from error
 
 
 def _camera_from_info(message, context: str) -> Camera:

@@ -91,8 +91,10 @@ def sources(*modules: str, root: Path = PACKAGE_ROOT) -> list[Path]:
     pending = list(modules)
     while pending:
         module = pending.pop()
+        if module in seen or module.split(".")[0] != "gpo":
+            continue
         path = module_file(module, root)
-        if module in seen or path is None or module.split(".")[0] != "gpo":
+        if path is None:
             continue
         seen[module] = path
         package = module if path.name == "__init__.py" else module.rpartition(".")[0]

@@ -60,9 +60,12 @@ class Trajectory:
         if backwards.size:
             i = backwards[0]
             raise ValueError(f"stamps go backwards at pose {i + 1}: {stamps[i]} ns then {stamps[i + 1]} ns")
-        norms = np.linalg.norm(quaternions, axis=1, keepdims=True)
+        with np.errstate(over="ignore"):  # a length beyond the largest float is refused below, not warned about
+            norms = np.linalg.norm(quaternions, axis=1, keepdims=True)
         if np.any(norms < 1e-9):
             raise ValueError(f"quaternion {int(np.argmin(norms))} has zero length")
+        if not np.isfinite(norms).all():
+            raise ValueError(f"quaternion {int(np.argmin(np.isfinite(norms)))} is too long to normalise (over 1e154)")
         object.__setattr__(self, "stamps_ns", stamps)
         object.__setattr__(self, "positions", positions)
         # normalise only what is off by more than rounding, so that file round trips stay exact
@@ -181,8 +184,12 @@ def _pose_problem(pose: list[float], stamp_ns: int, previous_ns: int | None) -> 
     """What is wrong with a TUM line's pose (tx ty tz qx qy qz qw) and stamp after the stamp above it; "" if nothing."""
     if not np.isfinite(pose).all():
         return "positions and quaternions must be finite numbers"
-    if np.linalg.norm(pose[3:]) < 1e-9:
+    with np.errstate(over="ignore"):  # a length beyond the largest float is refused below, not warned about
+        length = np.linalg.norm(pose[3:])
+    if length < 1e-9:
         return "the quaternion (qx qy qz qw) has zero length; expected a rotation, e.g. 0 0 0 1"
+    if not np.isfinite(length):
+        return "the quaternion (qx qy qz qw) is too long to normalise (over 1e154); expected a rotation, e.g. 0 0 0 1"
     if previous_ns is not None and stamp_ns < previous_ns:
         return "the stamps go backwards (this one is before the one above it); expected the poses in time order"
     return ""

@@ -143,9 +143,9 @@ def config_from(document: ConfigFile, path: Path, where: str | None = None) -> O
     where = where or str(path)
     rig = rig_from_config(document, path, where)
     kinematics = document.kinematics
-    model = None if kinematics is None else PaperBicycle(kinematics.wheelbase_m, kinematics.rear_to_reference_m)
     odometry = document.odometry.model_dump(exclude_none=True)
     try:
+        model = None if kinematics is None else PaperBicycle(kinematics.wheelbase_m, kinematics.rear_to_reference_m)
         floor = _floor_image(document.floor_image)
         return OdometryConfig(
             rig, floor, document.klt, document.keyframe, model, **odometry, fusion=document.fusion,

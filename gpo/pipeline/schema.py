@@ -356,7 +356,9 @@ def _camera(config: ConfigFile, path: Path, where: str):
             raise
         raise ValueError(f"{where}: camchain {config.camchain}: {error}") from None
     if name not in cameras:
-        raise ValueError(f"{where}: camchain_camera {name!r} is not in {config.camchain} ({', '.join(cameras)})")
+        raise ValueError(
+            f"{where}: camchain_camera {name!r} is not in {config.camchain} ({', '.join(map(str, cameras))})"
+        )
     return cameras[name]
 
 

@@ -182,14 +182,16 @@ def _bombed_grain(
     size = variants[0].shape[0]
     ramp = np.sin(np.linspace(0.0, np.pi, size, dtype=np.float32)) ** 2
     window = np.outer(ramp, ramp)
+    feathered = [window * variant for variant in variants]
+    squared = window * window
     height, width = shape
     weighted = np.zeros((height + 2 * size + spacing, width + 2 * size + spacing), np.float32)
     weights = np.zeros_like(weighted)
     for top in range(0, height + size, spacing):
         for left in range(0, width + size, spacing):
             i, j = top + rng.integers(spacing), left + rng.integers(spacing)
-            weighted[i : i + size, j : j + size] += window * variants[rng.integers(len(variants))]
-            weights[i : i + size, j : j + size] += window * window
+            weighted[i : i + size, j : j + size] += feathered[rng.integers(len(variants))]
+            weights[i : i + size, j : j + size] += squared
     region = (slice(size, size + height), slice(size, size + width))
     return weighted[region] / np.sqrt(np.maximum(weights[region], 1e-6))
 

@@ -35,26 +35,58 @@ def _base_name(node: ast.AST) -> str | None:
     return node.id if isinstance(node, ast.Name) else None
 
 
+def _names(node: ast.AST, context: type) -> set[str]:
+    """The plain names under ``node`` used in ``context`` (``ast.Load`` or ``ast.Store``)."""
+    return {sub.id for sub in ast.walk(node) if isinstance(sub, ast.Name) and isinstance(sub.ctx, context)}
+
+
+def _own_names(statement: ast.stmt) -> set[str]:
+    """The names a statement binds for its own use only and reads after binding: loop and comprehension variables,
+    ``as`` names, and a function's parameters and local variables."""
+    own = set()
+    for node in ast.walk(statement):
+        if isinstance(node, ast.For | ast.AsyncFor | ast.comprehension):
+            own |= _names(node.target, ast.Store)
+        elif isinstance(node, ast.withitem) and node.optional_vars is not None:
+            own |= _names(node.optional_vars, ast.Store)
+        elif isinstance(node, ast.ExceptHandler) and node.name:
+            own.add(node.name)
+        elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda):
+            arguments = node.args
+            own |= {arg.arg for arg in (*arguments.posonlyargs, *arguments.args, *arguments.kwonlyargs,
+                                        arguments.vararg, arguments.kwarg) if arg is not None}  # fmt: skip
+            for body in node.body if isinstance(node.body, list) else [node.body]:
+                own |= _names(body, ast.Store)
+    return own
+
+
+def _comprehension_names(statement: ast.stmt) -> set[str]:
+    """The variables of a statement's comprehensions, which Python keeps inside them."""
+    return {name for node in ast.walk(statement) if isinstance(node, ast.comprehension)
+            for name in _names(node.target, ast.Store)}  # fmt: skip
+
+
 def cell_names(source: str, modules: frozenset[str] = frozenset()) -> CellNames:
-    """What the code of one cell binds, changes and reads (reads inside its functions count too). A call of a
-    function of one of ``modules`` (``np.mean(...)``) changes nothing."""
+    """What the code of one cell binds, changes and reads. It reads a name when a statement uses it before the cell
+    has bound it (reads inside its functions count too, not their own parameters and variables, nor a loop's or a
+    comprehension's variable inside it). A call of a function of one of ``modules`` (``np.mean(...)``) changes
+    nothing."""
     tree = ast.parse(source)
-    binds, changes = set(), set()
+    binds, changes, reads = set(), set(), set()
     for statement in tree.body:
+        reads |= _names(statement, ast.Load) - _own_names(statement) - binds
         if isinstance(statement, ast.Import | ast.ImportFrom):
             binds |= {(alias.asname or alias.name).split(".")[0] for alias in statement.names}
             continue
         if isinstance(statement, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
             binds.add(statement.name)
             continue
+        binds |= _names(statement, ast.Store) - _comprehension_names(statement)
         for node in ast.walk(statement):
-            if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
-                binds.add(node.id)
-            elif isinstance(node, ast.Attribute | ast.Subscript) and isinstance(node.ctx, ast.Store | ast.Del):
+            if isinstance(node, ast.Attribute | ast.Subscript) and isinstance(node.ctx, ast.Store | ast.Del):
                 changes.add(_base_name(node))
             elif isinstance(node, ast.Expr) and isinstance(node.value, ast.Call):
                 changes.add(_base_name(node.value.func))
-    reads = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name) and not isinstance(node.ctx, ast.Store)}
     return CellNames(frozenset(binds), frozenset(changes - modules - {None}), frozenset(reads - BUILTINS))
 
 

@@ -47,6 +47,19 @@ def test_a_name_bound_again_ends_the_walk_back_for_it(tmp_path):
     assert cell_names("x = x + 1").reads == {"x"}
 
 
+def test_a_cells_own_names_are_not_read_from_cells_before_it(tmp_path):
+    own = [
+        "total = 0\nfor row in rows:\n    total = total + row",  # a loop's variable; total bound in the cell first
+        "def signed(value, decimals):\n    rounded = round(value, decimals)\n    return rounded",  # parameters, locals
+        "squares = [k * k for k in ks]\nwith open(path) as f:\n    text = f.read()",  # comprehension and `as` names
+        "try:\n    pass\nexcept ValueError as error:\n    print(error)",
+    ]
+    assert [sorted(cell_names(source).reads) for source in own] == [["rows"], [], ["ks", "path"], []]
+    assert "k" not in cell_names(own[2]).binds  # a comprehension's variable stays in the comprehension
+    sources = ["row = 1\nvalue = 2", "slow = [row for row in range(3)]", "def f(value):\n    return value", "show(f)"]
+    assert cells_panels_need(_notebook(tmp_path, sources, panels={3})) == [2, 3]
+
+
 def test_two_panels_need_the_union_of_their_cells(tmp_path):
     sources = ["a = 1", "b = 2", "show(a)", "c = 3", "show(b)"]
     assert cells_panels_need(_notebook(tmp_path, sources, panels={2, 4})) == [0, 1, 2, 4]

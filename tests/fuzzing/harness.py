@@ -6,7 +6,8 @@ property fails:
 
 - ``traceback``: an exception other than ``DOCUMENTED_ERRORS`` left the reader (a MemoryError too: the reader runs
   with ``MEMORY_BYTES`` to spare), or the check of its result;
-- ``hang``: the reader took more than ``HANG_S`` seconds;
+- ``hang``: the reader took more than ``HANG_S`` seconds of processor time, or a read waited ``WAITING`` times as
+  long (``time_limit``);
 - ``changed input``: a file of the input was changed, added or removed by reading it;
 - ``wrong result``: the reader returned what ``check`` finds wrong (an AssertionError, or a documented error of what
   the check does with the result: a config saved and refused when read again);
@@ -35,7 +36,7 @@ DOCUMENTED_ERRORS = (ValueError, OSError)
 """What a reader may raise on bad input (the command line's exit 1): ValueError, or an OSError for a file it cannot
 open."""
 HANG_S = 10.0
-"""The longest a reader may take on one input, seconds."""
+"""The longest a reader may take on one input, seconds of processor time (``time_limit``)."""
 MEMORY_BYTES = 2 * 2**30
 """The most memory a reader may take on one input beyond what the process holds: more is a MemoryError (a
 traceback), not the machine's memory filled."""
@@ -94,20 +95,36 @@ class Hang(BaseException):
     """A reader ran past its time limit (a BaseException, so that no ``except Exception`` swallows it)."""
 
 
+WAITING = 6
+"""How many times ``HANG_S`` of wall time a read may take that waits rather than works."""
+
+
 @contextlib.contextmanager
 def time_limit(seconds: float) -> Iterator[None]:
-    """Raise ``Hang`` in the main thread when the block runs longer than ``seconds``."""
+    """Raise ``Hang`` in the main thread when the block takes more than ``seconds`` of the process's processor time,
+    or ``WAITING`` times as long of wall time (a read blocked): a machine busy with other work slows a read down, and
+    only the reader's own work tells a hang."""
 
-    def expire(signum, frame):
-        raise Hang(f"more than {seconds} s")
+    def worked(signum, frame):
+        raise Hang(f"more than {seconds} s of processor time")
 
-    previous = signal.signal(signal.SIGALRM, expire)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    def waited(signum, frame):
+        raise Hang(f"waited more than {WAITING * seconds} s")
+
+    timers = {
+        signal.ITIMER_PROF: (signal.SIGPROF, worked, seconds),
+        signal.ITIMER_REAL: (signal.SIGALRM, waited, WAITING * seconds),
+    }
+    previous = {signum: signal.signal(signum, handler) for signum, handler, _ in timers.values()}
+    for timer, (_, _, limit) in timers.items():
+        signal.setitimer(timer, limit)
     try:
         yield
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
+        for timer in timers:
+            signal.setitimer(timer, 0)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 @contextlib.contextmanager
