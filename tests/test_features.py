@@ -24,6 +24,7 @@ from gpo.motion.keypoints import (
     detect,
     histogram_filter,
     invariance_check,
+    locate,
     match,
 )
 from gpo.odometry.estimators import FloorGeometry, RigidKeypoints
@@ -384,6 +385,21 @@ def test_no_keypoint_sees_a_masked_disc(detector):
     keypoints = detect(image, parameters, mask)
     distance = np.hypot(*(keypoints.points - centre).T)
     assert len(keypoints) > 50 and (distance > disc_radius + SUPPORT_PER_SIZE[detector] * keypoints.sizes).all()
+
+
+@pytest.mark.parametrize("detector", ["orb", "sift"])
+@pytest.mark.parametrize("where", [{}, {"roi": (10, 10, 300, 220), "scale": 0.8}])
+def test_keypoints_located_then_described_are_those_detected_and_described(detector, where):
+    image = _floor(7)
+    mask = np.ones(image.shape, bool)
+    cv2.circle(mask.view(np.uint8), (150, 110), 30, 0, -1)
+    parameters = FeatureParameters(detector=detector, **where)
+    detected, located = detect(image, parameters, mask), locate(image, parameters, mask)
+    described = located.described()
+    assert len(detected) > 20 and located.described() is not described  # each call a Keypoints, described once
+    for name in ("points", "descriptors", "sizes"):
+        np.testing.assert_array_equal(getattr(described, name), getattr(detected, name))
+    assert len(locate(np.full(image.shape, 90, np.uint8), parameters).described().descriptors) == 0
 
 
 @pytest.mark.parametrize("cross_check", [False, True])

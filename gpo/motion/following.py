@@ -4,7 +4,7 @@
 The second paper detects and describes keypoints in every frame and matches them with the previous frame's
 (``gpo.motion.keypoints.FeatureTracker``); SIFT's detection is most of a frame's time. Between two frames the floor
 moves a few tens of pixels and turns a degree or two, which Lucas-Kanade follows for far less. So here a keyframe's
-keypoints are detected and described once (``gpo.motion.keypoints.detect``), and in each later frame the window
+keypoints are detected once (``gpo.motion.keypoints.locate``), and in each later frame the window
 about each of them in the keyframe is searched for by ``cv2.calcOpticalFlowPyrLK`` with the config's ``klt``
 window, pyramid and stopping rule: from the keyframe's image, so that each frame's errors are its own, starting
 where the keypoint was in the latest frame moved by that frame's motion, in a view turned back onto the keyframe
@@ -17,8 +17,8 @@ The keyframe is kept as ``FeatureParameters.keyframe`` says: while at least ``mi
 still followed, for at most ``max_frames`` frames. The frame that ends it becomes the new keyframe, and its
 keypoints are detected then. When the followed keypoints cannot measure a frame (too few followed or kept: a
 blurred frame, a jump beyond the pyramid's reach), the frame's keypoints, detected for the new keyframe, are matched
-with the keyframe's descriptors and filtered, as the paper does every frame: matching happens only when it is
-needed.
+with the keyframe's and filtered, as the paper does every frame: matching happens only when it is needed, and
+so does describing the two frames' keypoints (SIFT's descriptors cost about as much as finding its keypoints).
 
 Lucas-Kanade assumes that a patch keeps its brightness, which the exposure's flicker and the vignetting break: each
 frame is levelled first as the floor image's KLT flow levels it (``prepare``, a ``FollowFrame``; it depends on the
@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from gpo.motion.keypoints import FeatureMatches, FeatureParameters, Keypoints, detect, filtered, matched, timed
+from gpo.motion.keypoints import FeatureMatches, FeatureParameters, Located, filtered, locate, matched, timed
 from gpo.motion.klt import KLTParameters
 from gpo.motion.levelling import levelled, reduced_local_mean
 from gpo.motion.median import median_of
@@ -77,7 +77,7 @@ class KeypointFollower:
 
     def restart(self) -> None:
         """Forget the frames before: the next ``track`` call starts afresh."""
-        self._keyframe: Keypoints | None = None
+        self._keyframe: Located | None = None
         self._followed = np.zeros(0, int)  # the keyframe's keypoints still followed, by index
         self._last = np.zeros((0, 2), np.float32)  # where they were in the latest frame, pixels
         self._image: np.ndarray | None = None  # the keyframe, levelled
@@ -124,12 +124,13 @@ class KeypointFollower:
             return measured
         detected = self._new_keyframe(frame, seconds)
         if measured.flag is not None:  # the followed keypoints cannot measure it: the keyframe's matched instead
-            measured = matched(keyframe, detected, self.parameters, self._rng, seconds)
+            described = timed(seconds, "describe", lambda: (keyframe.described(), detected.described()))
+            measured = matched(*described, self.parameters, self._rng, seconds)
         return measured
 
-    def _follow(self, frame: FollowFrame, elapsed: float) -> tuple[Keypoints, np.ndarray, np.ndarray]:
+    def _follow(self, frame: FollowFrame, elapsed: float) -> tuple[Located, np.ndarray, np.ndarray]:
         """The keyframe's followed keypoints searched for in ``frame``, ``elapsed`` (seconds, or frames) after the
-        latest frame: the keypoints where they were found (with the keyframe's descriptors and sizes), the pairs
+        latest frame: the keypoints where they were found (with the keyframe's sizes), the pairs
         (M, 2) (keyframe index, index among them) and each one's motion since the latest frame (M, 2), pixels.
 
         Each keypoint's window is searched for from the keyframe's image, not the latest frame's, so that a
@@ -144,8 +145,7 @@ class KeypointFollower:
         p = self.klt
         keyframe, followed = self._keyframe, self._followed
         if not len(followed):
-            return Keypoints(np.zeros((0, 2)), keyframe.descriptors[:0], np.zeros(0)), np.zeros((0, 2), int), \
-                np.zeros((0, 2))
+            return Located(np.zeros((0, 2)), np.zeros(0)), np.zeros((0, 2), int), np.zeros((0, 2))
         start = keyframe.points[followed].astype(np.float32)
         shift = np.zeros(2, np.float32) if self._velocity is None else (self._velocity * elapsed).astype(np.float32)
         guess, image = self._last + shift, frame.levelled
@@ -166,7 +166,7 @@ class KeypointFollower:
         keep &= np.einsum("ij,ij->i", back - start, back - start) < p.forward_backward_px**2
         keep &= self._inside(end, frame.image.shape)
         followed = followed[keep]
-        current = Keypoints(end[keep].astype(float), keyframe.descriptors[followed], keyframe.sizes[followed])
+        current = Located(end[keep].astype(float), keyframe.sizes[followed])
         return current, np.column_stack([followed, np.arange(len(followed))]), end[keep] - self._last[keep]
 
     def _inside(self, points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
@@ -180,9 +180,10 @@ class KeypointFollower:
             inside[inside] = self._mask[v, u]
         return inside
 
-    def _new_keyframe(self, frame: FollowFrame, seconds: dict) -> Keypoints:
-        """``frame`` becomes the keyframe: its keypoints detected, all of them followed from here."""
-        keypoints = timed(seconds, "detect", detect, frame.image, self.parameters, self._mask)
+    def _new_keyframe(self, frame: FollowFrame, seconds: dict) -> Located:
+        """``frame`` becomes the keyframe: its keypoints detected, all of them followed from here; they are described
+        only if a frame must be matched with them."""
+        keypoints = timed(seconds, "detect", locate, frame.image, self.parameters, self._mask)
         self._keyframe, self._image, self._frames = keypoints, frame.levelled, 0
         self._followed = np.arange(len(keypoints))
         self._last = keypoints.points.astype(np.float32)

@@ -47,7 +47,9 @@ from __future__ import annotations
 import math
 import numbers
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -203,9 +205,34 @@ class Keypoints:
         return len(self.points)
 
 
+@dataclass(frozen=True, eq=False)
+class Located:
+    """Keypoints found but not yet described (``locate``): ``points`` (N, 2) pixels of the full image and ``sizes``
+    (N,) diameters, pixels, as ``Keypoints``; ``described()`` gives them with their descriptors, computed on the
+    first call (``describe``, None for keypoints that cannot be described: followed ones, ``gpo.motion.following``).
+    """
+
+    points: np.ndarray
+    sizes: np.ndarray
+    describe: Callable[[], np.ndarray] | None = field(default=None, repr=False)
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    @cached_property
+    def _descriptors(self) -> np.ndarray:
+        if self.describe is None:
+            raise FeatureError("these keypoints were followed, not detected: they have no descriptors of their own")
+        return self.describe()
+
+    def described(self) -> Keypoints:
+        """The keypoints with their descriptors (computed once)."""
+        return Keypoints(self.points, self._descriptors, self.sizes)
+
+
 def detect(image: np.ndarray, parameters: FeatureParameters, mask=None) -> Keypoints:
     """The keypoints of a grey 8-bit ``image`` (H, W) whose descriptor support lies inside the image (the region of
-    interest, if any) and off ``mask``.
+    interest, if any) and off ``mask``, described.
 
     ``mask`` (H, W), optional: nonzero where the image may be used. The support is the disc of radius
     ``SUPPORT_PER_SIZE[detector] * size`` about the keypoint (ORB: size / 2, at least 15.5 px; SIFT: 3 size), in
@@ -213,24 +240,62 @@ def detect(image: np.ndarray, parameters: FeatureParameters, mask=None) -> Keypo
     the image (or region of interest), or when a masked pixel lies within the radius plus half a pixel's diagonal
     of it (the distance to the mask is read at the keypoint's rounded pixel), on the keypoint itself included.
     """
+    searched, usable, corner = _searched(image, parameters, mask)
+    found, descriptors = _detector(parameters).detectAndCompute(searched, None if usable.all() else usable)
+    if not found:
+        return _no_keypoints(parameters.detector)
+    inside, points, sizes = _placed(found, searched.shape, usable, corner, parameters)
+    return Keypoints(points, descriptors[inside], sizes)
+
+
+def locate(image: np.ndarray, parameters: FeatureParameters, mask=None) -> Located:
+    """The keypoints ``detect`` finds in ``image`` (H, W), not yet described: their descriptors are computed when
+    first asked for (``Located.described``), the same as ``detect``'s. Detecting alone costs SIFT about half of
+    detecting and describing (the Gaussian pyramid is built again to describe)."""
+    searched, usable, corner = _searched(image, parameters, mask)
+    found = _detector(parameters).detect(searched, None if usable.all() else usable)
+    if not found:
+        empty = _no_keypoints(parameters.detector)
+        return Located(empty.points, empty.sizes, lambda: empty.descriptors)
+    inside, points, sizes = _placed(found, searched.shape, usable, corner, parameters)
+    kept = [keypoint for keypoint, chosen in zip(found, inside, strict=True) if chosen]
+    return Located(points, sizes, lambda: _described(searched, kept, parameters))
+
+
+def _searched(image, parameters: FeatureParameters, mask) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
+    """The image keypoints are searched in (cut to the region of interest, resized by ``scale``), its mask (255 where
+    usable) and the region's corner (u, v) in the full image."""
     image = _grey(image)
     usable = _usable(mask, image.shape)
-    (u0, v0), image, usable = _region(image, usable, parameters.roi)
+    corner, image, usable = _region(image, usable, parameters.roi)
     scale = parameters.scale
     if scale != 1.0:
         image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
         area = cv2.resize(usable, image.shape[::-1], interpolation=cv2.INTER_AREA)
         usable = np.where(area == 255, 255, 0).astype(np.uint8)  # a pixel that saw any masked pixel is masked
-    found, descriptors = _detector(parameters).detectAndCompute(image, None if usable.all() else usable)
-    if not found:
-        return _no_keypoints(parameters.detector)
+    return image, usable, corner
+
+
+def _placed(found, shape, usable, corner, parameters: FeatureParameters) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which of the keypoints ``found`` in the searched image (H, W) keep their support clear (``detect``), and the
+    kept ones' points (pixel centres of the full image) and sizes (diameters, full image pixels)."""
     points = np.array([keypoint.pt for keypoint in found], dtype=float)
     if parameters.detector == "orb":
-        points = _orb_points(points, np.array([keypoint.octave for keypoint in found]), image.shape)
+        points = _orb_points(points, np.array([keypoint.octave for keypoint in found]), shape)
     sizes = np.array([keypoint.size for keypoint in found], dtype=float)
     inside = _support_clear(points, SUPPORT_PER_SIZE[parameters.detector] * sizes, usable)
-    full = (points[inside] + 0.5) / scale - 0.5 + [u0, v0]  # pixel centres of the full image
-    return Keypoints(full, descriptors[inside], sizes[inside] / scale)
+    scale = parameters.scale
+    return inside, (points[inside] + 0.5) / scale - 0.5 + corner, sizes[inside] / scale
+
+
+def _described(searched: np.ndarray, found: list, parameters: FeatureParameters) -> np.ndarray:
+    """The descriptors (N, D) of the keypoints ``found`` in the ``searched`` image."""
+    if not found:
+        return _no_keypoints(parameters.detector).descriptors
+    described, descriptors = _detector(parameters).compute(searched, found)
+    if len(described) != len(found):
+        raise FeatureError(f"{len(found) - len(described)} of {len(found)} keypoints could not be described")
+    return descriptors
 
 
 def _grey(image) -> np.ndarray:
