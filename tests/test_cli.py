@@ -140,8 +140,8 @@ def test_evaluate_names_the_file_with_bad_numbers(tmp_path, capsys):
 
 
 def test_recordings_rendered_at_once_are_the_bag_rendered_alone(tmp_path, monkeypatch, capsys):
-    """Two processes rendering the same preset at once leave one bag, byte for byte the one rendered alone."""
-    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path / "alone"))
+    """Two processes rendering the same preset at once leave one bag, byte for byte the one rendered alone (the
+    cache's, which one process rendered)."""
     alone = recording("test", progress=False)
     monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path / "at-once"))
     assert main(["recording", "test", "test", "--jobs", "2"]) == 0
