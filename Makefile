@@ -70,8 +70,7 @@ wheel: recordings
 # (.ci/fp-path: avx2, then sse4): the chapters under nbval (the mounts chapters 01 and 10 measure among them), and the
 # calibration, fusion and papers' tables tests. They read the recordings and kept runs that the machine's own path made
 # (cache keys do not depend on the path). Lab B prints saved benchmark results, and lab E runs every path itself, each
-# in a process of its own: they run once, in the pytest phase. The chapters' kernels there show a figure as its text,
-# without making its PNG (.ci/fp-kernels: nbval compares the text, not the picture, and the pytest phase draws them all)
+# in a process of its own: they run once, in the pytest phase
 FP_NOTEBOOKS := $(filter-out notebooks/B_% notebooks/E_%,$(wildcard notebooks/*.ipynb))
 FP_CHECKS := $(FP_NOTEBOOKS) tests/test_calibrate.py tests/test_calibrate_models.py tests/test_camera_fit.py \
 	tests/test_fusion.py tests/test_fusion_pipeline.py tests/test_table1.py tests/test_table3_metric.py \
@@ -84,8 +83,8 @@ PYTEST := $(BIN)/python -m pytest -p no:cacheprovider -n 2 --dist loadfile
 test: $(STAMP) $(CHROMIUM) recordings tables wheel
 	$(BIN)/ruff check .
 	$(PHASE) pytest $(PYTEST) --durations=25
-	$(PHASE) fp-avx2 env IPYTHONDIR=$(CURDIR)/.ci/fp-kernels .ci/fp-path avx2 $(PYTEST) -q $(FP_CHECKS)
-	$(PHASE) fp-sse4 env IPYTHONDIR=$(CURDIR)/.ci/fp-kernels .ci/fp-path sse4 $(PYTEST) -q $(FP_CHECKS)
+	$(PHASE) fp-avx2 .ci/fp-path avx2 $(PYTEST) -q $(FP_CHECKS)
+	$(PHASE) fp-sse4 .ci/fp-path sse4 $(PYTEST) -q $(FP_CHECKS)
 
 test-browser: $(STAMP) $(CHROMIUM) recordings
 	$(BIN)/python -m pytest -p no:cacheprovider tests/browser
