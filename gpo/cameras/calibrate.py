@@ -77,11 +77,10 @@ import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
-import scipy.sparse
-from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
@@ -100,6 +99,9 @@ from gpo.cameras.files import Camera
 from gpo.cameras.fit import fit_model, parameter_bounds
 from gpo.cameras.pinhole import Pinhole
 from gpo.cameras.targets import Chessboard
+
+if TYPE_CHECKING:
+    import scipy.sparse
 
 MODELS = tuple(MODEL_CLASSES)  # eucm, ds, kb4, omni, pinhole
 PINHOLE_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
@@ -448,6 +450,8 @@ class _ModelProblem:
         d_pixels_d_rotvec = d_pixels_d_point @ d_points_d_rotvec
         blocks = np.concatenate([d_pixels_d_theta[..., self.free], d_pixels_d_rotvec, d_pixels_d_point], axis=-1)
         blocks = np.nan_to_num(blocks, nan=0.0)  # a corner outside the valid region: constant residual
+        import scipy.sparse
+
         return scipy.sparse.csr_matrix((blocks.ravel(), self.indices, self.indptr), shape=self.shape)
 
 
@@ -464,6 +468,8 @@ def _model_fitter(
         raise ValueError(f"{model} has no parameter {', '.join(unknown)}; its are {', '.join(cls.PARAMETER_NAMES)}")
 
     def fit(used: list[int], start: _Fit | None) -> _Fit:
+        from scipy.optimize import least_squares  # imported by what calibrates, not by every command
+
         views = {index: observed[index] for index in used}
         if start is None and prior is not None and set(used) <= set(prior.board_poses):
             camera = prior.camera if prior.model == model else fit_model(prior.camera, model).camera
