@@ -54,6 +54,15 @@ def test_unknown_command_fails_with_usage():
     assert result.returncode == 2 and "invalid choice: 'fly'" in result.stderr
 
 
+def test_the_command_line_starts_without_what_only_some_commands_use():
+    """The fusion's filterpy (which imports scipy.stats) and scipy.optimize (the calibration's, the mount's and the
+    simulator's fits) are imported by what uses them, not by every process that starts the command line."""
+    heavy = ("filterpy", "scipy.stats", "scipy.optimize", "matplotlib", "distributed")
+    code = f"import sys, gpo.cli, gpo.sim.record; print(*[name for name in {heavy!r} if name in sys.modules])"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert result.stdout.split() == []
+
+
 def _write_scaled_pair(truth, folder, scale: float):
     """TUM files of ``truth`` and of an estimate that covers ``scale`` times its ground from the same start; return
     (estimate, truth) paths and the final position error in mm that origin alignment must find."""
