@@ -3,6 +3,10 @@ they need (``needed_cells.cells_panels_need``) run without an error, and one con
 panel shows. A screenshot of each panel goes to ``out/screenshots/``.
 
 nbval runs every cell of every chapter; only a browser shows that a panel is drawn and redrawn when a control moves.
+
+The chapters are read one after the other in one page (``Reader``), each opened as the file browser opens a notebook
+and closed when its test ends: starting JupyterLab in a page costs Chromium about 4 s of processor time, opening a
+chapter in a running one about 2 s.
 """
 
 from __future__ import annotations
@@ -178,16 +182,54 @@ def _screenshot(page, cell, path: Path) -> None:
     page.screenshot(path=path)
 
 
+class Reader:
+    """One JupyterLab page in which the chapters are opened one after the other: the first in a new page at its
+    address, the next ones in the running JupyterLab (``docmanager:open``, the file browser's command), each closed,
+    and its kernel stopped, when its test ends. A chapter whose test failed takes its page with it, so that the next
+    chapter starts in a new one."""
+
+    def __init__(self, browser, lab):
+        self.browser, self.lab, self.page = browser, lab, None
+
+    def open(self, path: str):
+        """The page, showing the notebook ``path`` (relative to the project)."""
+        if self.page is None:
+            self.page = self.browser.new_page(viewport=VIEWPORT)
+            self.page.goto(self.lab.address(path))
+        else:
+            self.page.evaluate("path => window.jupyterapp.commands.execute('docmanager:open', {path})", path)
+        return self.page
+
+    def close(self, failed: bool) -> None:
+        """Close the open notebook (with the page, if its test ``failed``) and stop every kernel."""
+        if self.page is not None and failed:
+            self.page.close()
+            self.page = None
+        elif self.page is not None:
+            self.page.evaluate(
+                "() => { for (const widget of [...window.jupyterapp.shell.widgets('main')]) widget.dispose(); }"
+            )
+        self.lab.shut_down_kernels()
+
+
+@pytest.fixture(scope="module")
+def reader(lab, browser):
+    opened = Reader(browser, lab)
+    yield opened
+    if opened.page is not None:
+        opened.page.close()
+
+
 @pytest.mark.parametrize("chapter", sorted(MOVES))
-def test_chapter_runs_and_its_panel_redraws(lab, browser, chapter):
+def test_chapter_runs_and_its_panel_redraws(lab, reader, chapter):
     path = f"notebooks/{chapter}.ipynb"
     notebook = ROOT / path
     saved = notebook.read_bytes()
     SCREENSHOTS.mkdir(parents=True, exist_ok=True)
     (SCREENSHOTS / f"{chapter}-failed.png").unlink(missing_ok=True)
-    page = browser.new_page(viewport=VIEWPORT)
+    failed = True
     try:
-        page.goto(lab.address(path))
+        page = reader.open(path)
         _wait_for_kernel(page, lab, path)
         _run(page, cells_panels_need(notebook))
         assert _errors(page) == []
@@ -207,10 +249,11 @@ def test_chapter_runs_and_its_panel_redraws(lab, browser, chapter):
         assert _ink(output) >= 0.5 * ink, f"{move.label} set to {move.value}: the figure came back half drawn"
         assert _errors(page) == []
         _screenshot(page, cell, SCREENSHOTS / f"{chapter}.png")
+        failed = False
     except Exception:
-        page.screenshot(path=SCREENSHOTS / f"{chapter}-failed.png", full_page=True)
+        if reader.page is not None:
+            reader.page.screenshot(path=SCREENSHOTS / f"{chapter}-failed.png", full_page=True)
         raise
     finally:
-        page.close()
-        lab.shut_down_kernels()
+        reader.close(failed)
     assert notebook.read_bytes() == saved, "the chapter on disk was rewritten"
