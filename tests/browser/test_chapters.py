@@ -30,6 +30,7 @@ RUN_S = 300.0  # the cells of the slowest chapter's panels run in about half a m
 UPDATE_S = 60.0
 KERNEL_START_S = 60.0
 SETTLE_S = 1.0  # an output unchanged this long, its kernel idle, is complete
+POLL_MS = 200  # how often the page and the server are asked again
 VIEWPORT = {"width": 1400, "height": 1000}
 ERROR_MARKS = ("Traceback (most recent call last)", "Error displaying widget")
 
@@ -96,7 +97,7 @@ def _settled(page, lab, path: str, output) -> str:
     deadline = time.monotonic() + UPDATE_S
     shown, since = _shown(output), time.monotonic()
     while time.monotonic() < deadline:
-        page.wait_for_timeout(200)
+        page.wait_for_timeout(POLL_MS)
         now = _shown(output)
         if now != shown:
             shown, since = now, time.monotonic()
@@ -114,7 +115,7 @@ def _wait_for_kernel(page, lab, path: str) -> None:
             dialog.locator(".jp-Dialog-button.jp-mod-accept").click()
         if _kernel_idle(lab, path):
             return
-        page.wait_for_timeout(500)
+        page.wait_for_timeout(POLL_MS)
     pytest.fail(f"no idle kernel for {path} after {KERNEL_START_S:.0f} s")
 
 
@@ -132,7 +133,7 @@ def _run(page, indices: list[int]) -> None:
         busy = any("*" in prompt for prompt in prompts)
         if not busy and (all(re.search(r"\[\d+\]", prompts[index]) for index in indices) or _errors(page)):
             return
-        page.wait_for_timeout(500)
+        page.wait_for_timeout(POLL_MS)
     pytest.fail(f"the cells were still running after {RUN_S:.0f} s: {_prompts(page)}")
 
 
@@ -244,7 +245,7 @@ def test_chapter_runs_and_its_panel_redraws(lab, reader, chapter):
         _move(control, move.value)
         deadline = time.monotonic() + UPDATE_S
         while _shown(output) == before and time.monotonic() < deadline:
-            page.wait_for_timeout(200)
+            page.wait_for_timeout(POLL_MS)
         assert _settled(page, lab, path, output) != before, f"{move.label} set to {move.value}: the panel stayed"
         assert _ink(output) >= 0.5 * ink, f"{move.label} set to {move.value}: the figure came back half drawn"
         assert _errors(page) == []
