@@ -77,10 +77,10 @@ import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
+import scipy.sparse
 from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
@@ -99,9 +99,6 @@ from gpo.cameras.files import Camera
 from gpo.cameras.fit import fit_model, parameter_bounds
 from gpo.cameras.pinhole import Pinhole
 from gpo.cameras.targets import Chessboard
-
-if TYPE_CHECKING:
-    import scipy.sparse
 
 MODELS = tuple(MODEL_CLASSES)  # eucm, ds, kb4, omni, pinhole
 PINHOLE_PARAMETER_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
@@ -450,8 +447,6 @@ class _ModelProblem:
         d_pixels_d_rotvec = d_pixels_d_point @ d_points_d_rotvec
         blocks = np.concatenate([d_pixels_d_theta[..., self.free], d_pixels_d_rotvec, d_pixels_d_point], axis=-1)
         blocks = np.nan_to_num(blocks, nan=0.0)  # a corner outside the valid region: constant residual
-        import scipy.sparse
-
         return scipy.sparse.csr_matrix((blocks.ravel(), self.indices, self.indptr), shape=self.shape)
 
 
