@@ -54,6 +54,15 @@ def test_unknown_command_fails_with_usage():
     assert result.returncode == 2 and "invalid choice: 'fly'" in result.stderr
 
 
+def test_the_command_line_starts_without_what_only_some_commands_use():
+    """The fusion's filterpy (which imports scipy.stats) and scipy.optimize (the calibration's, the mount's and the
+    simulator's fits) are imported by what uses them, not by every process that starts the command line."""
+    heavy = ("filterpy", "scipy.stats", "scipy.optimize", "matplotlib", "distributed")
+    code = f"import sys, gpo.cli, gpo.sim.record; print(*[name for name in {heavy!r} if name in sys.modules])"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert result.stdout.split() == []
+
+
 def _write_scaled_pair(truth, folder, scale: float):
     """TUM files of ``truth`` and of an estimate that covers ``scale`` times its ground from the same start; return
     (estimate, truth) paths and the final position error in mm that origin alignment must find."""
@@ -140,8 +149,8 @@ def test_evaluate_names_the_file_with_bad_numbers(tmp_path, capsys):
 
 
 def test_recordings_rendered_at_once_are_the_bag_rendered_alone(tmp_path, monkeypatch, capsys):
-    """Two processes rendering the same preset at once leave one bag, byte for byte the one rendered alone."""
-    monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path / "alone"))
+    """Two processes rendering the same preset at once leave one bag, byte for byte the one rendered alone (the
+    cache's, which one process rendered)."""
     alone = recording("test", progress=False)
     monkeypatch.setenv("GPO_CACHE_DIR", str(tmp_path / "at-once"))
     assert main(["recording", "test", "test", "--jobs", "2"]) == 0

@@ -7,7 +7,7 @@ import pytest
 import yaml
 
 from gpo.cli import main
-from gpo.experiments.runs import board_image_path, route_config
+from gpo.experiments.runs import route_config
 from gpo.io.bag import Recording
 from gpo.io.bag_writer import BagWriter
 from gpo.io.trajectory import Trajectory
@@ -16,7 +16,7 @@ from gpo.odometry.kinematics import compose
 from gpo.pipeline.config import load_config, save_config
 from gpo.pipeline.odometer import FloorOdometer, FrameRecord
 from gpo.pipeline.run import OdometryResult, run, tracking_path
-from gpo.sim.record import FLOOR_BOARDS, GROUND_TRUTH_TOPIC, recording
+from gpo.sim.record import FLOOR_BOARDS, GROUND_TRUTH_TOPIC, floor_board_path, recording
 from gpo.sim.rigs import t265_rig
 
 FRAMES = 60  # two seconds of the sample recording: straight ahead at up to 0.5 m/s
@@ -205,7 +205,8 @@ def test_a_chessboard_route_needs_a_readable_board_image(tmp_path):
     with pytest.raises(ValueError, match=r"none\.png"):
         FloorOdometer(missing)
     again = load_config(save_config(tmp_path / "rig.yaml", route_config("gpo", "ortho-gpi")))
-    assert (again.route, again.board, again.board_image) == ("ortho-gpi", FLOOR_BOARDS["t265"], board_image_path())
+    expected = ("ortho-gpi", FLOOR_BOARDS["t265"], floor_board_path("t265"))
+    assert (again.route, again.board, again.board_image) == expected
 
 
 def test_fused_runs_the_floor_odometry_and_the_tracking_camera_through_the_ekf(sample, tmp_path):

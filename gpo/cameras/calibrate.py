@@ -81,7 +81,6 @@ from pathlib import Path
 import cv2
 import numpy as np
 import scipy.sparse
-from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
@@ -464,6 +463,8 @@ def _model_fitter(
         raise ValueError(f"{model} has no parameter {', '.join(unknown)}; its are {', '.join(cls.PARAMETER_NAMES)}")
 
     def fit(used: list[int], start: _Fit | None) -> _Fit:
+        from scipy.optimize import least_squares  # imported by what calibrates, not by every command
+
         views = {index: observed[index] for index in used}
         if start is None and prior is not None and set(used) <= set(prior.board_poses):
             camera = prior.camera if prior.model == model else fit_model(prior.camera, model).camera

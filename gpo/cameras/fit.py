@@ -21,7 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from gpo.cameras import MODELS
 
@@ -130,6 +129,8 @@ def fit_model(source, model: str, step_px: float = 16.0, max_angle_deg: float | 
     def jacobian(params):
         _, j_params = cls.from_params(params, width, height).project_jacobians(rays)
         return np.nan_to_num(j_params, nan=0.0).reshape(-1, len(params))
+
+    from scipy.optimize import least_squares  # imported by what fits, not by every command
 
     solution = least_squares(
         residuals, start.params, jac=jacobian, bounds=parameter_bounds(model), x_scale="jac", ftol=1e-10, xtol=1e-10

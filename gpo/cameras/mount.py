@@ -73,7 +73,6 @@ from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
-from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from gpo.cameras.base import CameraModel
@@ -331,6 +330,8 @@ def _reprojection(corners: np.ndarray, camera: CameraModel, board: Chessboard, p
 
 def _refine_pose(corners: np.ndarray, camera: CameraModel, board: Chessboard, initial):
     """camera <- board minimising the corners' reprojection error in pixels, from ``initial``."""
+    from scipy.optimize import least_squares  # imported by what measures a mount, not by every command
+
     fit = least_squares(
         lambda delta: _reprojection(corners, camera, board, _perturbed(initial, delta)),
         np.zeros(6),

@@ -1,5 +1,5 @@
-"""Floor runs the chapters share, kept on disk: the simulated T265 rig's board image, a floor method's config on a
-route, a floor run computed once and read back, and the tracking camera with a drift of one's choosing.
+"""Floor runs the chapters share, kept on disk: a floor method's config on a route, a floor run computed once and read
+back, and the tracking camera with a drift of one's choosing.
 
 A floor run (``floor_run``) takes a few seconds a path; each is kept in the cache's ``runs`` folder (``gpo.io.cache``),
 keyed by the recording, the whole config and the source of every module a run goes through (``RUN_MODULES``), so
@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -22,7 +21,7 @@ from gpo.pipeline.config import OdometryConfig, config_to_dict, load_config
 from gpo.pipeline.run import FloorRun, run
 from gpo.sim.drift import TrackingDrift, tracking_odometry
 from gpo.sim.paths import named_plan
-from gpo.sim.record import FLOOR_BOARDS, START_NS, floor_board_image
+from gpo.sim.record import FLOOR_BOARDS, START_NS, floor_board_path
 from gpo.sim.rigs import RIGS
 
 RUN_MODULES = ("gpo.pipeline.run", "gpo.sim.record")
@@ -43,23 +42,13 @@ def drifted_tracking(path: str, drift: TrackingDrift, seed: int) -> Trajectory:
     return base_from_sensor_odometry(odometry, (mount.body_rotation, mount.position), start)
 
 
-def board_image_path() -> Path:
-    """A PNG of the simulated T265 rig's view of ``FLOOR_BOARDS["t265"]`` (written into the cache on first use, keyed
-    by the simulator's sources like the recordings)."""
-    key = gpo.io.cache.key(sources=sources("gpo.sim.record"))
-    path = gpo.io.cache.path("recordings", "floor_board_t265", key, ".png")
-    if not gpo.io.cache.intact(path):
-        gpo.io.cache.write(path, lambda partial: cv2.imwrite(str(partial), floor_board_image("t265")))
-    return path
-
-
 def route_config(method: str, route: str, base: OdometryConfig | None = None) -> OdometryConfig:
     """``base`` (default: the shipped config) with ``method`` on the floor image of ``route``; the chessboard routes
-    calibrated on ``board_image_path()``."""
+    calibrated on the simulated T265 rig's view of its floor board (``gpo.sim.record.floor_board_path``)."""
     base = base or load_config()
     if route == "analytic":
         return base.replace(method=method, route=route)
-    return base.replace(method=method, route=route, board_image=board_image_path(), board=FLOOR_BOARDS["t265"])
+    return base.replace(method=method, route=route, board_image=floor_board_path("t265"), board=FLOOR_BOARDS["t265"])
 
 
 def floor_run(bag, config: OdometryConfig, cache: bool = True) -> FloorRun:

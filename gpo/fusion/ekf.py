@@ -33,7 +33,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from filterpy.kalman import ExtendedKalmanFilter
 from scipy.linalg.lapack import dpotrf
 
 from gpo.odometry.kinematics import arc_increment
@@ -149,6 +148,9 @@ class OdometryFusion:
         self.time_s = float(start_s)
         self.calibrated = calibrated
         self._jitter_variance = np.square(np.asarray(jitter, dtype=float))
+        # imported here: filterpy's package imports scipy.stats, half a second a process that never fuses pays
+        from filterpy.kalman import ExtendedKalmanFilter
+
         size = AUGMENTED + 3 * len(sources)
         self._filter = ExtendedKalmanFilter(dim_x=size, dim_z=len(MEASURED))
         self._filter.x = np.zeros(size)

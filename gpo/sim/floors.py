@@ -193,7 +193,8 @@ def _bombed_grain(
             weighted[i : i + size, j : j + size] += feathered[rng.integers(len(variants))]
             weights[i : i + size, j : j + size] += squared
     region = (slice(size, size + height), slice(size, size + width))
-    return weighted[region] / np.sqrt(np.maximum(weights[region], 1e-6))
+    norm = np.sqrt(np.maximum(weights[region], np.float32(1e-6), out=weights[region]), out=weights[region])
+    return np.divide(weighted[region], norm, out=weighted[region])
 
 
 def _low_frequency(
@@ -202,8 +203,10 @@ def _low_frequency(
     """A smooth random field around 1 (1 +- amplitude), varying over about ``cell_m`` metres."""
     cells = (int(np.ceil(shape[0] * texel / cell_m)) + 2, int(np.ceil(shape[1] * texel / cell_m)) + 2)
     coarse = rng.normal(0.0, 1.0, cells).astype(np.float32)
-    field = cv2.resize(coarse, shape[::-1], interpolation=cv2.INTER_CUBIC)
-    return 1.0 + amplitude * np.tanh(field)
+    field = np.tanh(cv2.resize(coarse, shape[::-1], interpolation=cv2.INTER_CUBIC))
+    field *= amplitude
+    field += 1.0
+    return field
 
 
 def _wood(grain: np.ndarray, texel: float, rng: np.random.Generator) -> np.ndarray:

@@ -381,14 +381,19 @@ def _frames(setup: Setup, scene: Scene, jobs: int) -> Iterator[np.ndarray]:
         yield from (scene.frame(index) for index in range(count))
         return
     tasks = [range(start, min(start + FRAMES_PER_TASK, count)) for start in range(0, count, FRAMES_PER_TASK)]
-    with ProcessPoolExecutor(jobs, initializer=_start_rendering, initargs=(setup,)) as pool:
-        for images in pool.map(_render, tasks):
-            yield from images
+    _WORKER_SCENE["scene"] = scene  # a process forked from this one starts with it, floor texture and all
+    try:
+        with ProcessPoolExecutor(jobs, initializer=_start_rendering, initargs=(setup,)) as pool:
+            for images in pool.map(_render, tasks):
+                yield from images
+    finally:
+        _WORKER_SCENE.clear()
 
 
 def _start_rendering(setup: Setup) -> None:
-    """In a rendering process: set up the scene of ``setup`` once."""
-    _WORKER_SCENE["scene"] = Scene.of(setup)
+    """In a rendering process: set up the scene of ``setup`` once, unless it was forked with it."""
+    if "scene" not in _WORKER_SCENE:
+        _WORKER_SCENE["scene"] = Scene.of(setup)
 
 
 def _render(indices: range) -> list[np.ndarray]:
@@ -450,7 +455,31 @@ FLOOR_BOARDS = {
 
 
 def floor_board_image(rig_name: str, seed: int = 0) -> np.ndarray:
-    """The rig's camera image of ``FLOOR_BOARDS[rig_name]`` on a raised floor, the robot at the world origin."""
+    """The rig's camera image (uint8) of ``FLOOR_BOARDS[rig_name]`` on a raised floor, the robot at the world origin:
+    rendered once, then read from the cache (``floor_board_path``); on a full disk rendered and not kept."""
+    path = _floor_board_cached(rig_name, seed)
+    if cache.intact(path):
+        return cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    image = _render_floor_board(rig_name, seed)
+    cache.keep(path, lambda partial: cv2.imwrite(str(partial), image))
+    return image
+
+
+def floor_board_path(rig_name: str, seed: int = 0) -> Path:
+    """The PNG of ``floor_board_image(rig_name, seed)`` in the cache (``recordings``), written on first use and keyed by
+    the simulator's sources like the recordings."""
+    path = _floor_board_cached(rig_name, seed)
+    if not cache.intact(path):
+        cache.write(path, lambda partial: cv2.imwrite(str(partial), _render_floor_board(rig_name, seed)))
+    return path
+
+
+def _floor_board_cached(rig_name: str, seed: int) -> Path:
+    key = cache.key(rig_name, seed, sources=sources(__name__))
+    return cache.path("recordings", f"floor_board_{rig_name}", key, ".png")
+
+
+def _render_floor_board(rig_name: str, seed: int) -> np.ndarray:
     rig = RIGS[rig_name]()
     floor = make_floor("raised", (-1.0, 2.0, -1.5, 1.5), TEXEL_M[rig_name], seed)
     return FloorRenderer(rig, floor).render(np.zeros(3), frame_seed=seed, boards=(FLOOR_BOARDS[rig_name],))

@@ -56,7 +56,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
 
 from gpo.cameras.base import finite, positive
 
@@ -144,11 +143,19 @@ def _ramp(v0: float, v1: float, accel: float, jerk: float, tau: np.ndarray):
     return v0 * tau + signed_jerk * bracket(3), v0 + signed_jerk * bracket(2), signed_jerk * bracket(1)
 
 
+def _root(function, low: float, high: float, xtol: float) -> float:
+    """The root of ``function`` between ``low`` and ``high``, to ``xtol`` (Brent's method). scipy.optimize is imported
+    here, by what draws a path, not by every process that imports the simulator."""
+    from scipy.optimize import brentq
+
+    return brentq(function, low, high, xtol=xtol)
+
+
 def _fastest_reachable(v_from: float, v_limit: float, length: float, accel: float, jerk: float) -> float:
     """The highest speed <= ``v_limit`` that a ramp starting at ``v_from`` reaches within ``length``."""
     if v_limit <= v_from or _ramp_distance(v_from, v_limit, accel, jerk) <= length:
         return v_limit
-    return brentq(lambda v: _ramp_distance(v_from, v, accel, jerk) - length, v_from, v_limit, xtol=1e-13)
+    return _root(lambda v: _ramp_distance(v_from, v, accel, jerk) - length, v_from, v_limit, 1e-13)
 
 
 @dataclass(frozen=True)
@@ -203,7 +210,7 @@ def _speed_profile(v_in: float, cruise: float, v_out: float, length: float, acce
     elif spare(lowest) <= 0:
         peak = lowest
     else:
-        peak = brentq(spare, lowest, cruise, xtol=1e-13)
+        peak = _root(spare, lowest, cruise, 1e-13)
     return SpeedProfile(v_in, peak, v_out, max(spare(peak), 0.0) / peak, accel, jerk)
 
 
@@ -402,7 +409,7 @@ class SCurve(_SmoothTurn):
                 f"SCurve.offset_m = {self.offset_m} m is more than a {self.length_m} m S-curve can shift "
                 f"(at most {most * self.length_m:.3f} m)"
             )
-        peak = brentq(lambda psi: _scurve_offset_ratio(psi) - abs(ratio), 0.0, _SCURVE_MAX_PEAK_HEADING, xtol=1e-14)
+        peak = _root(lambda psi: _scurve_offset_ratio(psi) - abs(ratio), 0.0, _SCURVE_MAX_PEAK_HEADING, 1e-14)
         object.__setattr__(self, "peak_heading_rad", math.copysign(peak, ratio))
 
     def heading(self, u):

@@ -1,10 +1,11 @@
 """A JupyterLab server and a Chromium for the browser tests, both stopped at the end whatever happens.
 
 The server is this environment's JupyterLab on a loopback port with a token, rooted at the project, with settings
-of its own in a temporary folder: no autosave (a run never rewrites a chapter), every cell kept in the page (the
-test reads them all), no news; its kernels draw inline whatever ``MPLBACKEND`` says. The browser is Debian's
-Chromium (``CHROMIUM``, installed by ``make test-browser``), started by Playwright, which never downloads a browser
-of its own here.
+of its own in a temporary folder, its application reachable from the page (``window.jupyterapp``, so that a test
+can open a notebook as the file browser does): no autosave (a run never rewrites a chapter), every cell kept in the
+page (the test reads them all), no news; its kernels draw inline whatever ``MPLBACKEND`` says. The browser is
+Debian's Chromium (``CHROMIUM``, installed by ``make test-browser``), started by Playwright, which never downloads a
+browser of its own here.
 """
 
 from __future__ import annotations
@@ -112,7 +113,8 @@ def lab(tmp_path_factory) -> Lab:
     command = [
         sys.executable, "-m", "jupyterlab", "--no-browser", "--ServerApp.ip=127.0.0.1", f"--ServerApp.port={port}",
         "--ServerApp.port_retries=0", f"--IdentityProvider.token={token}", f"--ServerApp.root_dir={ROOT}",
-        "--LabApp.extension_manager=readonly", *(["--allow-root"] if os.geteuid() == 0 else []),
+        "--LabApp.extension_manager=readonly", "--LabApp.expose_app_in_browser=True",
+        *(["--allow-root"] if os.geteuid() == 0 else []),
     ]  # fmt: skip
     log = home / "server.log"
     with log.open("w") as output:
