@@ -555,3 +555,67 @@ def sources_by_finish(result: dict) -> str:
             f"the better source there: {floor} {better.count(floor)}, camera {better.count('camera')}"
         )
     return "\n".join(lines)
+
+
+FEATURE_WAYS = ("per-frame detector", "keyframes + LK")  # benchmarks/features_population.py's two variants
+FURTHER_OFF_POINTS = 0.05  # features_ways_text names each draw where the follower ends this much further off (points)
+
+
+def features_ways_table(runs: list[dict]) -> dict[str, dict[str, tuple[float, float]]]:
+    """Per downward draw of the ``runs`` of ``benchmarks/features_population.py`` results: {draw: {way: (final error
+    %, heading RMSE deg)}} for each of ``FEATURE_WAYS``."""
+    table: dict[str, dict[str, tuple[float, float]]] = {}
+    for run in runs:
+        table.setdefault(run["draw"], {})[run["variant"]] = (run["final_error_percent"], run["heading_rmse_deg"])
+    return table
+
+
+def features_ways_text(results: dict[str, list[dict]]) -> str:
+    """Both ways of the feature odometer on each set of draws of ``results`` (label -> the runs of one or more
+    ``benchmarks/features_population.py`` results): the runs, the final error (%) and the heading RMSE (degrees) as
+    median, p90 (linear interpolation, as the benchmark's) and worst, and on how many draws the follower ends further
+    off or its heading RMSE is larger, each draw where it ends more than ``FURTHER_OFF_POINTS`` further off named."""
+    lines = [f"{'draws':20}{'way':20}{'runs':>5}{'final error [%]: median':>25}{'p90':>7}{'worst':>7}"
+             f"{'heading RMSE [deg]: median':>28}{'p90':>7}{'worst':>7}"]
+    tables = {label: features_ways_table(runs) for label, runs in results.items()}
+    for label, table in tables.items():
+        for way in FEATURE_WAYS:
+            final, heading = (np.array([ways[way][k] for ways in table.values()]) for k in (0, 1))
+            cells = [np.median(final), np.percentile(final, 90), final.max()]
+            cells += [np.median(heading), np.percentile(heading, 90), heading.max()]
+            lines.append(f"{label:20}{way:20}{len(table):5d}{cells[0]:25.3f}{cells[1]:7.3f}{cells[2]:7.2f}"
+                         f"{cells[3]:28.3f}{cells[4]:7.3f}{cells[5]:7.2f}")
+    for label, table in tables.items():
+        worse = [sum(ways[FEATURE_WAYS[1]][k] > ways[FEATURE_WAYS[0]][k] for ways in table.values()) for k in (0, 1)]
+        lines.append(f"{label}: the follower ends further off on {worse[0]} of {len(table)} draws, its heading RMSE is "
+                     f"larger on {worse[1]}")
+        for draw, ways in table.items():
+            (followed, followed_heading), (detected, detected_heading) = ways[FEATURE_WAYS[1]], ways[FEATURE_WAYS[0]]
+            if followed - detected > FURTHER_OFF_POINTS:
+                lines.append(f"  {draw}: {followed:.3f} % against {detected:.3f} %, heading RMSE "
+                             f"{followed_heading:.2f} against {detected_heading:.2f} deg")
+    return "\n".join(lines)
+
+
+def draw_features_ways(results: dict[str, list[dict]]) -> np.ndarray:
+    """Per draw, the follower's final error and heading RMSE against the per-frame detector's (log-log, the diagonal
+    where they are equal), one marker per set of draws of ``results`` (label -> the runs of features_population
+    results)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6))
+    units = ("final error [%]", "heading RMSE [deg]")
+    for column, (ax, unit) in enumerate(zip(axes, units, strict=True)):
+        values = []
+        for (label, runs), marker in zip(results.items(), "os", strict=False):
+            table = features_ways_table(runs)
+            x = [ways[FEATURE_WAYS[0]][column] for ways in table.values()]
+            y = [ways[FEATURE_WAYS[1]][column] for ways in table.values()]
+            ax.scatter(x, y, marker=marker, label=label, alpha=0.8)
+            values += x + y
+        low, high = min(values) / 1.5, max(values) * 1.5
+        ax.plot([low, high], [low, high], color="k", lw=0.7, label="equal")
+        ax.set(xscale="log", yscale="log", xlim=(low, high), ylim=(low, high), aspect="equal",
+               xlabel=f"detected in every frame: {unit}", ylabel=f"followed from keyframes: {unit}")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize="small")
+    fig.tight_layout()
+    return axes
