@@ -249,6 +249,38 @@ def draw_stage_worth(measures: dict, axes=None) -> np.ndarray:
     return axes
 
 
+
+STAGES = {  # a frame's stages as the trackers time them (``FeatureMatches.seconds``), in the order they run
+    "detect": "SIFT: find (and describe)", "describe": "describe (a failed search)", "match": "match descriptors",
+    "follow": "Lucas-Kanade: follow", "histogram": "histogram filter", "invariance": "invariance check",
+}
+
+
+def stage_milliseconds(seconds: list[dict]) -> dict[str, float]:
+    """The mean time a frame (ms) of each stage of ``STAGES`` that ran in any of a run's frames, from each frame's
+    ``FeatureMatches.seconds`` (``seconds``: one dict a frame; a frame where a stage did not run counts 0 for it)."""
+    ran = set().union(*seconds)
+    mean = {stage: float(np.mean([frame.get(stage, 0.0) for frame in seconds])) for stage in STAGES if stage in ran}
+    return {stage: 1e3 * value for stage, value in mean.items()}
+
+
+def draw_stage_times(stage_ms: dict, ax=None) -> plt.Axes:
+    """Each way of tracking (label -> ``stage_milliseconds``) as one horizontal bar, its stages' mean times a frame
+    (ms) stacked in the order they run, the first way at the top."""
+    if ax is None:
+        _, ax = plt.subplots(figsize=(10, 2.8))
+    labels = list(stage_ms)[::-1]
+    colours = dict(zip(STAGES, plt.rcParams["axes.prop_cycle"].by_key()["color"], strict=False))
+    left = np.zeros(len(labels))
+    for stage, name in STAGES.items():
+        widths = np.array([stage_ms[label].get(stage, 0.0) for label in labels])
+        if widths.any():
+            ax.barh(labels, widths, left=left, color=colours[stage], label=name)
+            left += widths
+    ax.set_xlabel("time a frame [ms]")
+    ax.legend(fontsize="small", ncols=3, loc="upper center", bbox_to_anchor=(0.5, -0.3))
+    return ax
+
 PAPER_FLOORS = {"wood": ("I", "II"), "raised": ("III",), "industrial": ("IV", "V", "VI", "VII", "VIII", "IX")}
 """The second paper's experiments on each kind of floor (its Table 1)."""
 
