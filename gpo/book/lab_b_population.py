@@ -1,3 +1,5 @@
+# long: one job, lab B's readings of the saved population results, section by section in the order the lab prints
+# them (each a text and a figure)
 """Lab B, the population of drawn worlds: the results ``benchmarks/population.py`` saved (``benchmarks/results/``),
 read and drawn, never run here (the papers' lengths take half an hour on two workers). The first population's fisheye
 draws beside the same worlds with their floors matte; what was drawn; each method's distribution, with the
