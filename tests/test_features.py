@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
+from textures import blurred_noise, turned_and_shifted
 
 from gpo.floor_image.image import FloorImage
 from gpo.motion.keyframes import FRAME_TO_FRAME, KeyframePolicy
@@ -38,26 +39,12 @@ SIZE = (320, 240)  # width, height
 def _floor(seed=0, size=SIZE) -> np.ndarray:
     """A seeded floor-like texture, 8-bit grey: uniform noise blurred at three scales, and a few shapes."""
     rng = np.random.default_rng(seed)
-    width, height = size
-    image = np.zeros((height, width))
-    for sigma in (1.0, 2.5, 6.0):
-        image += cv2.GaussianBlur(rng.uniform(-1, 1, (height, width)), (0, 0), sigma) * sigma
-    image = (image - image.min()) / np.ptp(image) * 200 + 20
+    image = blurred_noise(rng, size)
     for _ in range(6):
         centre = rng.integers([0, 0], size)
         cv2.circle(image, tuple(int(c) for c in centre), int(rng.integers(5, 20)), float(rng.uniform(0, 255)), -1)
         cv2.rectangle(image, tuple(int(c) for c in rng.integers([0, 0], size)), tuple(int(c) for c in centre), 128, 2)
     return image.astype(np.uint8)
-
-
-def _moved(image: np.ndarray, angle_deg: float, shift) -> tuple[np.ndarray, np.ndarray]:
-    """``image`` turned by ``angle_deg`` about its centre and shifted by ``shift`` (px), and the 2 x 3 map of a
-    point of ``image`` to where it lands (``cv2.warpAffine``'s)."""
-    height, width = image.shape
-    matrix = cv2.getRotationMatrix2D((width / 2, height / 2), angle_deg, 1.0)
-    matrix[:, 2] += shift
-    moved = cv2.warpAffine(image, matrix, (width, height), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
-    return moved, matrix
 
 
 def _mapped(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
@@ -84,7 +71,7 @@ MOTIONS = [(3.0, (12.0, -7.0)), (-4.0, (-15.0, 10.0)), (2.0, (18.0, 5.0))]  # de
 @pytest.mark.parametrize(("angle_deg", "shift"), MOTIONS)
 def test_sift_matches_give_the_known_turn_and_shift(angle_deg, shift):
     image = _floor(1)
-    moved, matrix = _moved(image, angle_deg, shift)
+    moved, matrix = turned_and_shifted(image, angle_deg, shift)
     matches = _tracked(image, moved, detector="sift")
     assert matches.flag is None and matches.kept.sum() >= 30
     angle_error, shift_error = _errors(*rigid_fit(matches.start, matches.end), matrix)
@@ -93,7 +80,7 @@ def test_sift_matches_give_the_known_turn_and_shift(angle_deg, shift):
 
 def test_orb_matches_give_a_known_shift():
     image = _floor(2)
-    moved, matrix = _moved(image, 0.0, (14.0, -9.0))
+    moved, matrix = turned_and_shifted(image, 0.0, (14.0, -9.0))
     matches = _tracked(image, moved, detector="orb")
     assert matches.flag is None and matches.kept.sum() >= 30
     angle_error, shift_error = _errors(*rigid_fit(matches.start, matches.end), matrix)
@@ -107,7 +94,7 @@ def test_orb_in_a_turn_needs_the_refit(angle_deg, shift):
     whose errors bring them near the histograms' means, and the fit on them alone reads the turn short. Fitting
     again on every match the fit explains (``refit``) recovers the motion."""
     image = _floor(1)
-    moved, matrix = _moved(image, angle_deg, shift)
+    moved, matrix = turned_and_shifted(image, angle_deg, shift)
     matches = _tracked(image, moved, detector="orb")
     assert matches.flag is None and matches.kept.sum() >= 30
     paper = increment_from_point_pairs(matches.start, matches.end)
@@ -221,7 +208,7 @@ def _with_wrong_pairs(share=0.3, seed=0):
     """SIFT's matches of a turned and shifted frame, unfiltered, with ``share`` of their number appended as
     random wrong pairs; the points and which pairs are right (within 1 px of the true map)."""
     image = _floor(3)
-    moved, matrix = _moved(image, 3.0, (15.0, 8.0))
+    moved, matrix = turned_and_shifted(image, 3.0, (15.0, 8.0))
     matches = _tracked(image, moved, detector="sift", histogram_filter=False, invariance_check=False)
     rng = np.random.default_rng(seed)
     count = int(share * len(matches.pairs))
@@ -406,7 +393,7 @@ def test_keypoints_located_then_described_are_those_detected_and_described(detec
 def test_matches_are_the_ratio_tested_nearest_descriptors(cross_check):
     image = _floor(6)
     parameters = FeatureParameters(detector="sift", cross_check=cross_check)
-    previous, current = detect(image, parameters), detect(_moved(image, 2.0, (10.0, 5.0))[0], parameters)
+    previous, current = detect(image, parameters), detect(turned_and_shifted(image, 2.0, (10.0, 5.0))[0], parameters)
     distance = np.linalg.norm(previous.descriptors[:, None, :] - current.descriptors[None, :, :], axis=2)
     nearest = np.sort(distance, axis=1)
     expected = {(i, int(j)) for i, j in enumerate(distance.argmin(axis=1)) if nearest[i, 0] < 0.8 * nearest[i, 1]}
@@ -420,7 +407,7 @@ def test_matches_are_the_ratio_tested_nearest_descriptors(cross_check):
 
 def test_scale_and_roi_give_full_image_pixels():
     image = _floor(7, (480, 360))
-    moved, matrix = _moved(image, 0.0, (9.0, 4.0))
+    moved, matrix = turned_and_shifted(image, 0.0, (9.0, 4.0))
     for fields in ({"scale": 0.5}, {"roi": (100, 80, 240, 180)}):
         matches = _tracked(image, moved, detector="sift", **fields)
         np.testing.assert_allclose(np.median(matches.end - matches.start, axis=0), matrix[:, 2], atol=0.3)
@@ -453,7 +440,7 @@ def test_keypoints_lie_on_what_they_mark(detector, scale):
 def test_each_frame_is_detected_once_and_restart_forgets_the_previous():
     image = _floor(8)
     tracker = FeatureTracker(FeatureParameters(detector="orb"))
-    frames = [image, _moved(image, 0.0, (5.0, 0.0))[0], _moved(image, 0.0, (10.0, 0.0))[0]]
+    frames = [image, turned_and_shifted(image, 0.0, (5.0, 0.0))[0], turned_and_shifted(image, 0.0, (10.0, 0.0))[0]]
     assert tracker.track(frames[0]) is None
     first, second = tracker.track(frames[1]), tracker.track(frames[2])
     assert second.previous is first.current
@@ -464,7 +451,7 @@ def test_each_frame_is_detected_once_and_restart_forgets_the_previous():
 
 def test_follow_on_detected_keypoints_is_track_on_the_images():
     image = _floor(8)
-    frames = [image, _moved(image, 1.0, (5.0, 2.0))[0], _moved(image, 2.0, (10.0, 4.0))[0]]
+    frames = [image, turned_and_shifted(image, 1.0, (5.0, 2.0))[0], turned_and_shifted(image, 2.0, (10.0, 4.0))[0]]
     parameters = FeatureParameters(detector="orb")
     tracked, followed = FeatureTracker(parameters), FeatureTracker(parameters)
     for frame in frames:
@@ -479,7 +466,7 @@ def _slid(count: int, step_px: float, keyframe: KeyframePolicy) -> tuple[list[np
     under ``keyframe``: each frame's keypoints, and each frame's matches after the first."""
     image, parameters = _floor(8), FeatureParameters(detector="orb", keyframe=keyframe)
     tracker = FeatureTracker(parameters)
-    frames = [detect(_moved(image, 0.0, (k * step_px, 0.0))[0], parameters) for k in range(count)]
+    frames = [detect(turned_and_shifted(image, 0.0, (k * step_px, 0.0))[0], parameters) for k in range(count)]
     assert tracker.follow(frames[0]) is None
     return frames, [tracker.follow(frame) for frame in frames[1:]]
 
@@ -543,17 +530,17 @@ def test_a_blank_frame_is_flagged_not_measured():
 
 def test_the_loops_count_the_matches_the_histogram_filter_kept():
     image = _floor(9)
-    matches = _tracked(image, _moved(image, 2.0, (12.0, 3.0))[0], detector="orb", ratio=1.0)
+    matches = _tracked(image, turned_and_shifted(image, 2.0, (12.0, 3.0))[0], detector="orb", ratio=1.0)
     assert matches.flag is None and 0 < matches.histogram_kept.sum() < len(matches.pairs)
     checked = np.flatnonzero(matches.histogram_kept)  # what the invariance check was given
     np.testing.assert_array_equal(checked[matches.invariance.kept], np.flatnonzero(matches.kept))
-    without = _tracked(image, _moved(image, 2.0, (12.0, 3.0))[0], detector="orb", histogram_filter=False)
+    without = _tracked(image, turned_and_shifted(image, 2.0, (12.0, 3.0))[0], detector="orb", histogram_filter=False)
     assert without.histogram is None and without.histogram_kept.all()
 
 
 def test_the_same_seed_gives_the_same_kept_matches():
     image = _floor(9)
-    moved = _moved(image, 2.0, (12.0, 3.0))[0]
+    moved = turned_and_shifted(image, 2.0, (12.0, 3.0))[0]
     fields = {"detector": "orb", "ratio": 1.0, "histogram_filter": False}  # many wrong matches: the loops decide
     first, again, other = (_tracked(image, moved, seed=seed, **fields) for seed in (7, 7, 8))
     np.testing.assert_array_equal(first.kept, again.kept)

@@ -4,6 +4,7 @@ followed keypoints land, when a keyframe is renewed, and the matching that stand
 import cv2
 import numpy as np
 import pytest
+from textures import blurred_noise, turned_and_shifted
 
 from gpo.motion.following import FollowFrame, KeypointFollower
 from gpo.motion.keyframes import KeyframePolicy
@@ -16,21 +17,7 @@ WIDTH, HEIGHT = 320, 240
 
 def _floor(seed: int = 0, size=(WIDTH, HEIGHT)) -> np.ndarray:
     """A seeded floor-like texture, 8-bit grey: uniform noise blurred at three scales."""
-    rng = np.random.default_rng(seed)
-    width, height = size
-    image = np.zeros((height, width))
-    for sigma in (1.5, 3.0, 6.0):
-        image += cv2.GaussianBlur(rng.uniform(-1, 1, (height, width)), (0, 0), sigma) * sigma
-    return ((image - image.min()) / np.ptp(image) * 200 + 20).astype(np.uint8)
-
-
-def _moved(image: np.ndarray, angle_deg: float, shift) -> tuple[np.ndarray, np.ndarray]:
-    """``image`` turned by ``angle_deg`` about its centre and shifted by ``shift`` (px), and the 2 x 3 map of a point
-    of ``image`` to where it lands."""
-    height, width = image.shape
-    matrix = cv2.getRotationMatrix2D((width / 2, height / 2), angle_deg, 1.0)
-    matrix[:, 2] += shift
-    return cv2.warpAffine(image, matrix, (width, height), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT), matrix
+    return blurred_noise(np.random.default_rng(seed), size, sigmas=(1.5, 3.0, 6.0)).astype(np.uint8)
 
 
 def _follower(**keyframe) -> KeypointFollower:
@@ -48,7 +35,7 @@ def test_followed_keypoints_land_where_the_floor_took_them():
     assert follower.track(image) is None
     keyframe = None
     for k in range(1, 9):
-        frame, matrix = _moved(image, 0.8 * k, (3.0 * k, -2.0 * k))
+        frame, matrix = turned_and_shifted(image, 0.8 * k, (3.0 * k, -2.0 * k))
         measured = follower.track(frame)
         assert measured.flag is None and not follower.keyframe_is_latest
         keyframe = keyframe or measured.previous
@@ -99,7 +86,7 @@ def test_a_frame_beyond_the_pyramids_reach_is_matched_with_the_keyframe_instead(
 
 def test_a_prepared_frame_is_followed_as_its_image_and_restart_forgets_the_frames_before():
     image = _floor(3)
-    frames = [_moved(image, 0.5 * k, (2.0 * k, 1.0 * k))[0] for k in range(4)]
+    frames = [turned_and_shifted(image, 0.5 * k, (2.0 * k, 1.0 * k))[0] for k in range(4)]
     by_image, by_prepared = _follower(), _follower()
     for frame in frames:
         prepared = by_prepared.prepare(frame)

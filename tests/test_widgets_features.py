@@ -10,6 +10,7 @@ import pytest
 from matplotlib.collections import LineCollection, PatchCollection, PolyCollection
 from matplotlib.colors import to_rgba
 from matplotlib.patches import StepPatch
+from textures import blurred_noise
 
 import gpo.book.ch08_floor_features
 from gpo.book.ch08_floor_features import (
@@ -32,12 +33,7 @@ pytestmark = pytest.mark.usefixtures("close_figures")  # conftest.py
 
 def _floor(seed=0) -> np.ndarray:
     """A seeded floor-like texture, 8-bit grey: uniform noise blurred at three scales."""
-    rng = np.random.default_rng(seed)
-    width, height = SIZE
-    image = np.zeros((height, width))
-    for sigma in (1.0, 2.5, 6.0):
-        image += cv2.GaussianBlur(rng.uniform(-1, 1, (height, width)), (0, 0), sigma) * sigma
-    return ((image - image.min()) / np.ptp(image) * 200 + 20).astype(np.uint8)
+    return blurred_noise(np.random.default_rng(seed), SIZE).astype(np.uint8)
 
 
 @pytest.fixture(scope="module")
