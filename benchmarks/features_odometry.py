@@ -75,17 +75,17 @@ def result_row(preset: str, variant: str, row) -> dict:
     }
 
 
-def shipped_as(variant: str) -> str:
-    """The variant whose run stands for ``variant``: ``default`` when ``variant`` only sets the shipped config's own
-    values (one of the two ways of following, whichever the config ships), else ``variant`` itself."""
-    shipped = load_config(CONFIG).features
+def shipped_as(variant: str, shipped) -> str:
+    """The variant whose run stands for ``variant``: ``default`` when ``variant`` only sets the ``shipped`` features
+    section's own values (one of the two ways of following, whichever the config ships), else ``variant`` itself."""
     same = all(getattr(shipped, name) == value for name, value in VARIANTS[variant].items())
     return "default" if same else variant
 
 
 def measure(presets: list[str], variants: list[str], out: Path, scheduler: str | None, workers: int | None) -> list:
     """Every (preset, configuration) row, in that order; a variant that is the shipped config is the default's run."""
-    run_variants = list(dict.fromkeys(shipped_as(variant) for variant in variants))
+    shipped = load_config(CONFIG).features
+    stands_for = {variant: shipped_as(variant, shipped) for variant in variants}
     with cluster_client(scheduler, workers) as client:
         bags = {name: path for (name, _), path in render(client, [(name, None) for name in presets]).items()}
         runs = [
@@ -96,12 +96,12 @@ def measure(presets: list[str], variants: list[str], out: Path, scheduler: str |
                 overrides={f"features.{name}": value for name, value in VARIANTS[variant].items()},
             )
             for preset in presets
-            for variant in run_variants
+            for variant in dict.fromkeys(stands_for.values())
         ]
         table = sweep(runs, out, client).table
     found = {row["recording"]: row for _, row in table.iterrows()}
     return [
-        result_row(preset, variant, found[label(preset, shipped_as(variant))])
+        result_row(preset, variant, found[label(preset, stands_for[variant])])
         for preset in presets
         for variant in variants
     ]
